@@ -1,0 +1,19 @@
+#pragma once
+// Default ROS 2 topics (wire names, "rt/" prefixed) of the service; every one is renamable in
+// epmapd's config and in the publishers' flags.
+
+#include <string>
+
+namespace epmap::dds {
+
+struct TopicNames {
+  std::string left_image = "rt/stereo/left/image_raw";
+  std::string right_image = "rt/stereo/right/image_raw";
+  std::string left_info = "rt/stereo/left/camera_info";
+  std::string right_info = "rt/stereo/right/camera_info";
+  std::string joints = "rt/joint_states";
+  std::string odom = "rt/odom";
+  std::string eye_hand_samples = "rt/epmap/eye_hand_samples";
+};
+
+}  // namespace epmap::dds
