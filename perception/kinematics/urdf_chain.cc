@@ -1,0 +1,194 @@
+#include "perception/kinematics/urdf_chain.h"
+
+#include <kdl/chain.hpp>
+#include <kdl/chainfksolverpos_recursive.hpp>
+#include <kdl/tree.hpp>
+#include <kdl_parser/kdl_parser.hpp>
+#include <urdf_parser/urdf_parser.h>
+
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <stdexcept>
+
+namespace epmap::kinematics {
+
+namespace {
+constexpr const char* kCam0 = "cam0_optical";
+constexpr const char* kCam1 = "cam1_optical";
+
+Eigen::Isometry3d ToEigen(const KDL::Frame& f) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) T.linear()(r, c) = f.M(r, c);
+    T.translation()(r) = f.p(r);
+  }
+  return T;
+}
+}  // namespace
+
+struct UrdfChain::Impl {
+  KDL::Tree tree;
+  std::string root;
+  std::vector<std::string> joint_names;  // union of the movable joints of the camera chains
+  bool has_cam1 = false;
+  // For each bound input position, the index into joint_names (or -1 if unused).
+  std::vector<int> input_to_joint;
+  bool bound = false;
+
+  struct ChainInfo {
+    KDL::Chain chain;
+    std::vector<int> joint_index;  // chain's movable joint i -> index into joint_names
+  };
+  // The camera chains, extracted once at load time (read-only afterwards: thread-safe).
+  std::map<std::string, ChainInfo> chains;
+
+  ChainInfo Chain(const std::string& link) const {
+    if (auto it = chains.find(link); it != chains.end()) return it->second;
+    ChainInfo info;
+    if (!tree.getChain(root, link, info.chain)) {
+      throw std::invalid_argument("URDF has no chain from '" + root + "' to '" + link + "'");
+    }
+    for (const auto& seg : info.chain.segments) {
+      if (seg.getJoint().getType() == KDL::Joint::None) continue;
+      const std::string& name = seg.getJoint().getName();
+      int idx = -1;
+      for (size_t i = 0; i < joint_names.size(); ++i) {
+        if (joint_names[i] == name) idx = static_cast<int>(i);
+      }
+      if (idx < 0) {
+        throw std::invalid_argument("joint '" + name + "' leads to '" + link +
+                                    "' but is not on a camera chain");
+      }
+      info.joint_index.push_back(idx);
+    }
+    return info;
+  }
+
+  std::vector<double> Reorder(const std::vector<double>& input) const {
+    std::vector<double> values(joint_names.size(), 0.0);
+    if (!bound) {
+      if (input.size() != joint_names.size()) {
+        throw std::invalid_argument("expected " + std::to_string(joint_names.size()) +
+                                    " joint values, got " + std::to_string(input.size()));
+      }
+      values = input;
+    } else {
+      if (input.size() != input_to_joint.size()) {
+        throw std::invalid_argument("expected " + std::to_string(input_to_joint.size()) +
+                                    " joint values, got " + std::to_string(input.size()));
+      }
+      for (size_t i = 0; i < input.size(); ++i) {
+        if (input_to_joint[i] >= 0) values[static_cast<size_t>(input_to_joint[i])] = input[i];
+      }
+    }
+    for (double v : values) {
+      if (!std::isfinite(v)) throw std::invalid_argument("joint value is not finite");
+    }
+    return values;
+  }
+
+  Eigen::Isometry3d Pose(const std::string& link, const std::vector<double>& input) const {
+    const ChainInfo info = Chain(link);
+    const std::vector<double> values = Reorder(input);
+    KDL::JntArray q(info.chain.getNrOfJoints());
+    for (size_t i = 0; i < info.joint_index.size(); ++i) {
+      q(static_cast<unsigned>(i)) = values[static_cast<size_t>(info.joint_index[i])];
+    }
+    KDL::ChainFkSolverPos_recursive fk(info.chain);
+    KDL::Frame frame;
+    if (fk.JntToCart(q, frame) < 0) throw std::runtime_error("KDL forward kinematics failed");
+    return ToEigen(frame);
+  }
+};
+
+UrdfChain::UrdfChain(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+UrdfChain::UrdfChain(UrdfChain&&) noexcept = default;
+UrdfChain& UrdfChain::operator=(UrdfChain&&) noexcept = default;
+UrdfChain::~UrdfChain() = default;
+
+UrdfChain UrdfChain::FromFile(const std::filesystem::path& urdf_path) {
+  std::ifstream in(urdf_path);
+  if (!in) throw std::runtime_error("cannot open URDF " + urdf_path.string());
+  std::stringstream text;
+  text << in.rdbuf();
+  try {
+    return FromString(text.str());
+  } catch (const std::exception& e) {
+    throw std::runtime_error(urdf_path.string() + ": " + e.what());
+  }
+}
+
+UrdfChain UrdfChain::FromString(const std::string& urdf_xml) {
+  const urdf::ModelInterfaceSharedPtr model = urdf::parseURDF(urdf_xml);
+  if (!model) throw std::runtime_error("the URDF does not parse");
+  auto impl = std::make_unique<Impl>();
+  if (!kdl_parser::treeFromUrdfModel(*model, impl->tree)) {
+    throw std::runtime_error("the URDF cannot be turned into a KDL tree");
+  }
+  impl->root = impl->tree.getRootSegment()->first;
+  const auto& segments = impl->tree.getSegments();
+  if (segments.find(kCam0) == segments.end()) {
+    throw std::runtime_error(std::string("the URDF has no link named '") + kCam0 + "'");
+  }
+  impl->has_cam1 = segments.find(kCam1) != segments.end();
+  for (const char* cam : {kCam0, kCam1}) {
+    if (std::string(cam) == kCam1 && !impl->has_cam1) continue;
+    KDL::Chain chain;
+    impl->tree.getChain(impl->root, cam, chain);
+    for (const auto& seg : chain.segments) {
+      if (seg.getJoint().getType() == KDL::Joint::None) continue;
+      const std::string& name = seg.getJoint().getName();
+      if (std::find(impl->joint_names.begin(), impl->joint_names.end(), name) ==
+          impl->joint_names.end()) {
+        impl->joint_names.push_back(name);
+      }
+    }
+  }
+  impl->chains.emplace(kCam0, impl->Chain(kCam0));
+  if (impl->has_cam1) impl->chains.emplace(kCam1, impl->Chain(kCam1));
+  return UrdfChain(std::move(impl));
+}
+
+const std::string& UrdfChain::root_link() const { return impl_->root; }
+const std::vector<std::string>& UrdfChain::joint_names() const { return impl_->joint_names; }
+bool UrdfChain::has_cam1() const { return impl_->has_cam1; }
+
+void UrdfChain::BindJointOrder(const std::vector<std::string>& names) {
+  std::vector<int> mapping(names.size(), -1);
+  std::vector<bool> found(impl_->joint_names.size(), false);
+  for (size_t i = 0; i < names.size(); ++i) {
+    for (size_t j = 0; j < impl_->joint_names.size(); ++j) {
+      if (names[i] == impl_->joint_names[j]) {
+        mapping[i] = static_cast<int>(j);
+        found[j] = true;
+      }
+    }
+  }
+  std::string missing;
+  for (size_t j = 0; j < found.size(); ++j) {
+    if (!found[j]) missing += (missing.empty() ? "" : ", ") + impl_->joint_names[j];
+  }
+  if (!missing.empty()) {
+    throw std::invalid_argument("joint readings lack the URDF chain joints: " + missing);
+  }
+  impl_->input_to_joint = std::move(mapping);
+  impl_->bound = true;
+}
+
+Eigen::Isometry3d UrdfChain::Cam0Pose(const std::vector<double>& joints) const {
+  return impl_->Pose(kCam0, joints);
+}
+
+Eigen::Isometry3d UrdfChain::Cam1Pose(const std::vector<double>& joints) const {
+  if (!impl_->has_cam1) throw std::invalid_argument("the URDF has no cam1_optical link");
+  return impl_->Pose(kCam1, joints);
+}
+
+Eigen::Isometry3d UrdfChain::LinkPose(const std::string& link,
+                                      const std::vector<double>& joints) const {
+  return impl_->Pose(link, joints);
+}
+
+}  // namespace epmap::kinematics

@@ -1,0 +1,50 @@
+#pragma once
+// The internal model's analytic half (paper 000, Sec. III-IV: T : R^I -> SE(3)): forward
+// kinematics of the chain from the URDF's root link to each camera's optical frame, computed
+// with orocos-KDL on a tree loaded through the URDF parser (kdl_parser).
+
+#include <Eigen/Geometry>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace epmap::kinematics {
+
+class UrdfChain {
+ public:
+  // Parses the URDF and extracts the chains root -> cam0_optical (required) and root ->
+  // cam1_optical (optional). Throws std::runtime_error with the reason on an unparsable URDF
+  // or a missing cam0_optical link.
+  static UrdfChain FromFile(const std::filesystem::path& urdf_path);
+  static UrdfChain FromString(const std::string& urdf_xml);
+
+  UrdfChain(UrdfChain&&) noexcept;
+  UrdfChain& operator=(UrdfChain&&) noexcept;
+  ~UrdfChain();
+
+  const std::string& root_link() const;
+  // The movable joints on the way to cam0_optical (and cam1_optical), in chain order.
+  const std::vector<std::string>& joint_names() const;
+  bool has_cam1() const;
+
+  // Binds the order of externally provided joint values (e.g. joints0's columns). Every
+  // chain joint must be present; extra names are ignored. Throws std::invalid_argument
+  // listing the chain joints that are missing.
+  void BindJointOrder(const std::vector<std::string>& names);
+
+  // T_root_cam0 (and T_root_cam1) for joint values in the bound order (or in joint_names()
+  // order if nothing was bound). Throws std::invalid_argument on a wrong count or NaN.
+  Eigen::Isometry3d Cam0Pose(const std::vector<double>& joints) const;
+  Eigen::Isometry3d Cam1Pose(const std::vector<double>& joints) const;
+  // Pose of any link of the tree.
+  Eigen::Isometry3d LinkPose(const std::string& link, const std::vector<double>& joints) const;
+
+ private:
+  struct Impl;
+  explicit UrdfChain(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace epmap::kinematics
