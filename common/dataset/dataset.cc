@@ -68,8 +68,8 @@ std::vector<std::vector<std::string>> ReadCsv(const fs::path& file,
   while (std::getline(in, line)) {
     if (!line.empty() && line.back() == '\r') line.pop_back();
     if (line.empty()) continue;
-    if (line[0] == '#' || (first && !std::isdigit(static_cast<unsigned char>(line[0])) &&
-                           line[0] != '-')) {
+    if (line[0] == '#' ||
+        (first && !std::isdigit(static_cast<unsigned char>(line[0])) && line[0] != '-')) {
       if (first && header) *header = SplitCsv(line[0] == '#' ? line.substr(1) : line);
       first = false;
       continue;
@@ -278,7 +278,8 @@ Dataset Load(const fs::path& path) {
   if (!fs::exists(path)) throw std::runtime_error(path.string() + ": no such dataset");
   if (fs::exists(path / "pair.yaml")) return LoadPair(path);
   if (fs::exists(path / "mav0")) return LoadSequence(path);
-  if (path.filename() == "mav0" && fs::exists(path / "cam0")) return LoadSequence(path.parent_path());
+  if (path.filename() == "mav0" && fs::exists(path / "cam0"))
+    return LoadSequence(path.parent_path());
   throw std::runtime_error(path.string() +
                            ": neither a sequence (mav0/cam0, mav0/cam1) nor a stereo pair "
                            "(left.png, right.png, pair.yaml)");
@@ -289,8 +290,8 @@ bool Dataset::rectified() const {
     return std::all_of(d.begin(), d.end(), [](double v) { return v == 0.0; });
   };
   const Eigen::Matrix4d rel = cam0.T_BS.inverse() * cam1.T_BS;
-  const bool same_k = cam0.fu == cam1.fu && cam0.fv == cam1.fv && cam0.cu == cam1.cu &&
-                      cam0.cv == cam1.cv;
+  const bool same_k =
+      cam0.fu == cam1.fu && cam0.fv == cam1.fv && cam0.cu == cam1.cu && cam0.cv == cam1.cv;
   const bool pure_x = (rel.block<3, 3>(0, 0) - Eigen::Matrix3d::Identity()).norm() < 1e-9 &&
                       std::abs(rel(1, 3)) < 1e-9 && std::abs(rel(2, 3)) < 1e-9;
   return zero(cam0.distortion) && zero(cam1.distortion) && same_k && pure_x;
@@ -336,9 +337,8 @@ std::optional<std::vector<double>> InterpolateJoints(const std::vector<JointSamp
     if (stamp_ns - samples.back().stamp_ns > max_gap_ns) return std::nullopt;
     return samples.back().positions;
   }
-  const auto hi = std::lower_bound(
-      samples.begin(), samples.end(), stamp_ns,
-      [](const JointSample& s, int64_t t) { return s.stamp_ns < t; });
+  const auto hi = std::lower_bound(samples.begin(), samples.end(), stamp_ns,
+                                   [](const JointSample& s, int64_t t) { return s.stamp_ns < t; });
   const auto lo = hi - 1;
   if (hi->stamp_ns == stamp_ns) return hi->positions;
   const double w = static_cast<double>(stamp_ns - lo->stamp_ns) /
@@ -365,9 +365,8 @@ std::optional<PlanarPose> InterpolatePlanar(const std::vector<PlanarPose>& sampl
     p.stamp_ns = stamp_ns;
     return p;
   }
-  const auto hi = std::lower_bound(
-      samples.begin(), samples.end(), stamp_ns,
-      [](const PlanarPose& s, int64_t t) { return s.stamp_ns < t; });
+  const auto hi = std::lower_bound(samples.begin(), samples.end(), stamp_ns,
+                                   [](const PlanarPose& s, int64_t t) { return s.stamp_ns < t; });
   const auto lo = hi - 1;
   const double w = static_cast<double>(stamp_ns - lo->stamp_ns) /
                    static_cast<double>(std::max<int64_t>(1, hi->stamp_ns - lo->stamp_ns));

@@ -77,7 +77,7 @@ struct Dataset {
   int min_disparity = 0;
   int num_disparities = 0;  // 0 = not stated
 
-  bool rectified() const;  // zero distortion, same intrinsics, pure-x baseline
+  bool rectified() const;     // zero distortion, same intrinsics, pure-x baseline
   double baseline_m() const;  // |t| between the two cameras
 };
 

@@ -63,13 +63,15 @@ void Writer::WriteCameraSensor(int index, const CameraSensor& cam, const std::st
   if (!f) throw std::runtime_error("cannot write " + (dir / "sensor.yaml").string());
   std::fprintf(f, "%%YAML:1.0\n# General sensor definitions.\nsensor_type: camera\ncomment: %s\n\n",
                comment.c_str());
-  std::fprintf(f, "# Sensor extrinsics wrt. the body-frame.\nT_BS:\n  cols: 4\n  rows: 4\n  data: [");
+  std::fprintf(f,
+               "# Sensor extrinsics wrt. the body-frame.\nT_BS:\n  cols: 4\n  rows: 4\n  data: [");
   for (int i = 0; i < 16; ++i) {
     std::fprintf(f, "%s%.12g", i ? ", " : "", cam.T_BS(i / 4, i % 4));
   }
   std::fprintf(f, "]\n\n# Camera specific definitions.\nrate_hz: %g\nresolution: [%d, %d]\n",
                cam.rate_hz, cam.width, cam.height);
-  std::fprintf(f, "camera_model: pinhole\nintrinsics: [%.12g, %.12g, %.12g, %.12g] #fu, fv, cu, cv\n",
+  std::fprintf(f,
+               "camera_model: pinhole\nintrinsics: [%.12g, %.12g, %.12g, %.12g] #fu, fv, cu, cv\n",
                cam.fu, cam.fv, cam.cu, cam.cv);
   std::fprintf(f, "distortion_model: %s\ndistortion_coefficients: [", cam.distortion_model.c_str());
   for (size_t i = 0; i < cam.distortion.size(); ++i) {
@@ -98,15 +100,16 @@ void Writer::SetJointNames(const std::vector<std::string>& names) {
   const fs::path dir = mav0_ / "joints0";
   fs::create_directories(dir);
   std::ofstream y(dir / "sensor.yaml");
-  y << "# Encoder readings of the kinematic chain in kinematics.urdf.\nsensor_type: joints\nnames: [";
+  y << "# Encoder readings of the kinematic chain in kinematics.urdf.\nsensor_type: joints\nnames: "
+       "[";
   for (size_t i = 0; i < names.size(); ++i) y << (i ? ", " : "") << names[i];
   y << "]\nunits: rad\n";
 }
 
 void Writer::AddJoints(int64_t stamp_ns, const std::vector<double>& positions) {
   if (positions.size() != joint_names_.size()) {
-    throw std::runtime_error("AddJoints: " + std::to_string(positions.size()) +
-                             " positions for " + std::to_string(joint_names_.size()) + " names");
+    throw std::runtime_error("AddJoints: " + std::to_string(positions.size()) + " positions for " +
+                             std::to_string(joint_names_.size()) + " names");
   }
   std::string header = "#timestamp [ns]";
   for (const auto& n : joint_names_) header += "," + n;
@@ -118,25 +121,27 @@ void Writer::AddJoints(int64_t stamp_ns, const std::vector<double>& positions) {
 
 void Writer::AddOdometry(const PlanarPose& pose) {
   std::FILE* csv = Csv("odometry0", "#timestamp [ns],x [m],y [m],theta [rad]");
-  std::fprintf(csv, "%lld,%.6f,%.6f,%.6f\n", static_cast<long long>(pose.stamp_ns), pose.x,
-               pose.y, pose.theta);
+  std::fprintf(csv, "%lld,%.6f,%.6f,%.6f\n", static_cast<long long>(pose.stamp_ns), pose.x, pose.y,
+               pose.theta);
 }
 
-void Writer::WriteUrdf(const std::string& urdf_xml) { WriteFile("kinematics.urdf", urdf_xml); }
+void Writer::WriteUrdf(const std::string& urdf_xml) {
+  WriteFile("kinematics.urdf", urdf_xml);
+}
 
 void Writer::AddGtCameraPose(int64_t stamp_ns, const Eigen::Isometry3d& T_world_cam0) {
-  std::FILE* csv = Csv("gt_camera_pose0",
-                       "#timestamp [ns],p_x [m],p_y [m],p_z [m],q_w,q_x,q_y,q_z");
+  std::FILE* csv =
+      Csv("gt_camera_pose0", "#timestamp [ns],p_x [m],p_y [m],p_z [m],q_w,q_x,q_y,q_z");
   const Eigen::Quaterniond q(T_world_cam0.linear());
   const Eigen::Vector3d t = T_world_cam0.translation();
-  std::fprintf(csv, "%lld,%.9f,%.9f,%.9f,%.9f,%.9f,%.9f,%.9f\n",
-               static_cast<long long>(stamp_ns), t.x(), t.y(), t.z(), q.w(), q.x(), q.y(), q.z());
+  std::fprintf(csv, "%lld,%.9f,%.9f,%.9f,%.9f,%.9f,%.9f,%.9f\n", static_cast<long long>(stamp_ns),
+               t.x(), t.y(), t.z(), q.w(), q.x(), q.y(), q.z());
 }
 
 void Writer::AddGtBasePose(const PlanarPose& pose) {
   std::FILE* csv = Csv("gt_base_pose0", "#timestamp [ns],x [m],y [m],theta [rad]");
-  std::fprintf(csv, "%lld,%.6f,%.6f,%.6f\n", static_cast<long long>(pose.stamp_ns), pose.x,
-               pose.y, pose.theta);
+  std::fprintf(csv, "%lld,%.6f,%.6f,%.6f\n", static_cast<long long>(pose.stamp_ns), pose.x, pose.y,
+               pose.theta);
 }
 
 void Writer::AddGtDisparity(int64_t stamp_ns, const cv::Mat& disparity) {

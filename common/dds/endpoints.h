@@ -26,11 +26,11 @@ namespace epmap::dds {
 
 // What a reader saw of the transport itself, before any content validation.
 struct ReaderCounters {
-  std::atomic<uint64_t> received{0};    // samples taken with valid data
-  std::atomic<uint64_t> oversized{0};   // refused before decoding (over max_payload_bytes)
-  std::atomic<uint64_t> malformed{0};   // failed to decode
-  std::atomic<uint64_t> lost{0};        // reported lost by DDS (best-effort gaps)
-  std::atomic<uint64_t> rejected{0};    // rejected by DDS (resource limits)
+  std::atomic<uint64_t> received{0};   // samples taken with valid data
+  std::atomic<uint64_t> oversized{0};  // refused before decoding (over max_payload_bytes)
+  std::atomic<uint64_t> malformed{0};  // failed to decode
+  std::atomic<uint64_t> lost{0};       // reported lost by DDS (best-effort gaps)
+  std::atomic<uint64_t> rejected{0};   // rejected by DDS (resource limits)
 };
 
 template <class Msg, class PubSubType>
@@ -106,8 +106,7 @@ class Reader : public eprosima::fastdds::dds::DataReaderListener {
     qos.history().depth = depth;
     qos.endpoint().history_memory_policy =
         eprosima::fastrtps::rtps::PREALLOCATED_WITH_REALLOC_MEMORY_MODE;
-    reader_ = participant.subscriber()->create_datareader(topic, qos, this,
-                                                          StatusMask::all());
+    reader_ = participant.subscriber()->create_datareader(topic, qos, this, StatusMask::all());
     if (!reader_) throw std::runtime_error("cannot create a DDS reader on " + topic_name);
   }
   ~Reader() override {

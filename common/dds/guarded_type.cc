@@ -12,6 +12,8 @@ PayloadVerdict TakeVerdict() {
   return v;
 }
 
-void SetVerdict(PayloadVerdict verdict) { t_verdict = verdict; }
+void SetVerdict(PayloadVerdict verdict) {
+  t_verdict = verdict;
+}
 
 }  // namespace epmap::dds

@@ -1,8 +1,8 @@
 #include "common/dds/participant.h"
 
-#include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <fastdds/rtps/transport/UDPv4TransportDescriptor.h>
 #include <fastdds/rtps/transport/shared_mem/SharedMemTransportDescriptor.h>
+#include <fastdds/dds/domain/DomainParticipantFactory.hpp>
 #include <memory>
 #include <stdexcept>
 
@@ -63,8 +63,7 @@ Subscriber* Participant::subscriber() {
   return subscriber_;
 }
 
-eprosima::fastdds::dds::Topic* Participant::Topic(const std::string& topic_name,
-                                                  TypeSupport type) {
+eprosima::fastdds::dds::Topic* Participant::Topic(const std::string& topic_name, TypeSupport type) {
   std::lock_guard lock(mutex_);
   if (auto it = topics_.find(topic_name); it != topics_.end()) return it->second;
   if (!participant_->find_type(type.get_type_name())) {

@@ -70,11 +70,20 @@ void MatToImage(const cv::Mat& image, int64_t stamp_ns, const std::string& frame
                 sensor_msgs::msg::Image* msg) {
   const char* encoding = nullptr;
   switch (image.type()) {
-    case CV_8UC1: encoding = "mono8"; break;
-    case CV_8UC3: encoding = "bgr8"; break;
-    case CV_16UC1: encoding = "mono16"; break;
-    case CV_32FC1: encoding = "32FC1"; break;
-    default: throw std::invalid_argument("MatToImage: unsupported cv::Mat type");
+    case CV_8UC1:
+      encoding = "mono8";
+      break;
+    case CV_8UC3:
+      encoding = "bgr8";
+      break;
+    case CV_16UC1:
+      encoding = "mono16";
+      break;
+    case CV_32FC1:
+      encoding = "32FC1";
+      break;
+    default:
+      throw std::invalid_argument("MatToImage: unsupported cv::Mat type");
   }
   msg->header().stamp(FromNanoseconds(stamp_ns));
   msg->header().frame_id(frame_id);
@@ -110,8 +119,8 @@ std::optional<CameraCalibration> FromCameraInfo(const sensor_msgs::msg::CameraIn
   for (double v : c.k) finite &= std::isfinite(v);
   for (double v : c.r) finite &= std::isfinite(v);
   for (double v : c.p) finite &= std::isfinite(v);
-  if (!finite || c.width <= 0 || c.height <= 0 || c.k[0] <= 0 || c.k[4] <= 0 ||
-      c.width > 16384 || c.height > 16384) {
+  if (!finite || c.width <= 0 || c.height <= 0 || c.k[0] <= 0 || c.k[4] <= 0 || c.width > 16384 ||
+      c.height > 16384) {
     if (reason) *reason = "camera_info_invalid";
     return std::nullopt;
   }

@@ -34,10 +34,10 @@ struct CameraCalibration {
   int width = 0;
   int height = 0;
   std::string distortion_model = "plumb_bob";
-  std::vector<double> d;                       // distortion coefficients
-  std::array<double, 9> k{};                   // intrinsics, row-major
+  std::vector<double> d;                               // distortion coefficients
+  std::array<double, 9> k{};                           // intrinsics, row-major
   std::array<double, 9> r{1, 0, 0, 0, 1, 0, 0, 0, 1};  // rectifying rotation
-  std::array<double, 12> p{};                  // projection of the rectified camera
+  std::array<double, 12> p{};                          // projection of the rectified camera
 
   // Baseline (metres) of a right camera from P: P[3] = -fx' * B (REP 104).
   double baseline_from_p() const { return p[0] != 0.0 ? -p[3] / p[0] : 0.0; }
@@ -66,8 +66,7 @@ struct PlanarOdometry {
   double x = 0, y = 0, theta = 0;  // base in the odometry frame
 };
 // Odometry -> planar pose (yaw from the quaternion); nullopt with *reason "odom_nan".
-std::optional<PlanarOdometry> FromOdometry(const nav_msgs::msg::Odometry& msg,
-                                           std::string* reason);
+std::optional<PlanarOdometry> FromOdometry(const nav_msgs::msg::Odometry& msg, std::string* reason);
 void ToOdometry(const PlanarOdometry& odom, const std::string& frame_id,
                 const std::string& child_frame_id, nav_msgs::msg::Odometry* msg);
 

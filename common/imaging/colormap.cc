@@ -61,9 +61,8 @@ cv::Mat FloatToGrey(const cv::Mat& values, float hi) {
     const float* in = values.ptr<float>(r);
     auto* out = grey.ptr<uint8_t>(r);
     for (int c = 0; c < values.cols; ++c) {
-      out[c] = std::isfinite(in[c])
-                   ? static_cast<uint8_t>(std::clamp(in[c] * scale, 0.0F, 255.0F))
-                   : 0;
+      out[c] =
+          std::isfinite(in[c]) ? static_cast<uint8_t>(std::clamp(in[c] * scale, 0.0F, 255.0F)) : 0;
     }
   }
   return grey;

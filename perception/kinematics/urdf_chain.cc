@@ -1,10 +1,10 @@
 #include "perception/kinematics/urdf_chain.h"
 
+#include <urdf_parser/urdf_parser.h>
 #include <kdl/chain.hpp>
 #include <kdl/chainfksolverpos_recursive.hpp>
 #include <kdl/tree.hpp>
 #include <kdl_parser/kdl_parser.hpp>
-#include <urdf_parser/urdf_parser.h>
 
 #include <cmath>
 #include <fstream>
@@ -151,9 +151,15 @@ UrdfChain UrdfChain::FromString(const std::string& urdf_xml) {
   return UrdfChain(std::move(impl));
 }
 
-const std::string& UrdfChain::root_link() const { return impl_->root; }
-const std::vector<std::string>& UrdfChain::joint_names() const { return impl_->joint_names; }
-bool UrdfChain::has_cam1() const { return impl_->has_cam1; }
+const std::string& UrdfChain::root_link() const {
+  return impl_->root;
+}
+const std::vector<std::string>& UrdfChain::joint_names() const {
+  return impl_->joint_names;
+}
+bool UrdfChain::has_cam1() const {
+  return impl_->has_cam1;
+}
 
 void UrdfChain::BindJointOrder(const std::vector<std::string>& names) {
   std::vector<int> mapping(names.size(), -1);

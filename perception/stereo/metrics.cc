@@ -17,8 +17,7 @@ double DisparityScore::filled_share() const {
 
 DisparityScore ScoreDisparity(const cv::Mat& estimate, const cv::Mat& truth, double threshold_px,
                               const cv::Mat& mask) {
-  if (estimate.size() != truth.size() || estimate.type() != CV_32FC1 ||
-      truth.type() != CV_32FC1) {
+  if (estimate.size() != truth.size() || estimate.type() != CV_32FC1 || truth.type() != CV_32FC1) {
     throw std::invalid_argument("ScoreDisparity: estimate and truth must be same-size CV_32FC1");
   }
   if (!mask.empty() && (mask.size() != truth.size() || mask.type() != CV_8UC1)) {

@@ -7,9 +7,9 @@
 namespace epmap::stereo {
 
 struct DisparityScore {
-  size_t gt_pixels = 0;       // pixels with a known true disparity (inside the mask, if any)
-  size_t filled = 0;          // of those, pixels the estimate filled
-  size_t bad_filled = 0;      // filled and off by more than the threshold
+  size_t gt_pixels = 0;   // pixels with a known true disparity (inside the mask, if any)
+  size_t filled = 0;      // of those, pixels the estimate filled
+  size_t bad_filled = 0;  // filled and off by more than the threshold
   double bad_counting_unknown() const;  // (bad_filled + unfilled) / gt_pixels
   double bad_over_filled() const;       // bad_filled / filled
   double filled_share() const;          // filled / gt_pixels

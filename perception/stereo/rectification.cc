@@ -9,8 +9,12 @@ namespace epmap::stereo {
 
 namespace {
 
-cv::Matx33d K(const CameraParameters& c) { return cv::Matx33d(c.k.data()); }
-cv::Matx33d R(const CameraParameters& c) { return cv::Matx33d(c.r.data()); }
+cv::Matx33d K(const CameraParameters& c) {
+  return cv::Matx33d(c.k.data());
+}
+cv::Matx33d R(const CameraParameters& c) {
+  return cv::Matx33d(c.r.data());
+}
 cv::Matx33d P33(const CameraParameters& c) {
   return {c.p[0], c.p[1], c.p[2], c.p[4], c.p[5], c.p[6], c.p[8], c.p[9], c.p[10]};
 }
@@ -22,7 +26,9 @@ bool AllZero(const std::vector<double>& d) {
   return true;
 }
 
-bool Near(const cv::Matx33d& a, const cv::Matx33d& b) { return cv::norm(a - b) < 1e-9; }
+bool Near(const cv::Matx33d& a, const cv::Matx33d& b) {
+  return cv::norm(a - b) < 1e-9;
+}
 
 bool AlreadyRectified(const CameraParameters& c) {
   return AllZero(c.d) && Near(R(c), cv::Matx33d::eye()) && Near(P33(c), K(c));
@@ -45,16 +51,16 @@ Rectifier::Rectifier(const CameraParameters& left, const CameraParameters& right
       left.height != right.height) {
     throw std::invalid_argument("left and right cameras must have the same positive size");
   }
-  if (left.k[0] <= 0 || left.k[4] <= 0 || right.k[0] <= 0 || right.k[4] <= 0 ||
-      left.p[0] <= 0 || right.p[0] <= 0) {
+  if (left.k[0] <= 0 || left.k[4] <= 0 || right.k[0] <= 0 || right.k[4] <= 0 || left.p[0] <= 0 ||
+      right.p[0] <= 0) {
     throw std::invalid_argument("focal lengths in K and P must be positive");
   }
   const double baseline = -right.p[3] / right.p[0];
   if (!(std::abs(baseline) > 1e-6) || !std::isfinite(baseline)) {
     throw std::invalid_argument("the right camera's P carries no baseline (P[3] = -fx * B)");
   }
-  geometry_ = {left.width, left.height, left.p[0], left.p[5], left.p[2], left.p[6],
-               std::abs(baseline)};
+  geometry_ = {left.width, left.height, left.p[0],         left.p[5],
+               left.p[2],  left.p[6],   std::abs(baseline)};
   identity_ = AlreadyRectified(left) && AlreadyRectified(right);
   if (!identity_) {
     BuildMap(left, map_left_x_, map_left_y_);

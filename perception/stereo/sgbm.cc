@@ -23,11 +23,10 @@ void SgbmParams::Validate() const {
 
 SgbmMatcher::SgbmMatcher(const SgbmParams& params) : params_(params) {
   params_.Validate();
-  matcher_ = cv::StereoSGBM::create(params.min_disparity, params.num_disparities,
-                                    params.block_size, params.p1, params.p2,
-                                    params.disp12_max_diff, params.pre_filter_cap,
-                                    params.uniqueness_ratio, params.speckle_window,
-                                    params.speckle_range, params.mode);
+  matcher_ = cv::StereoSGBM::create(params.min_disparity, params.num_disparities, params.block_size,
+                                    params.p1, params.p2, params.disp12_max_diff,
+                                    params.pre_filter_cap, params.uniqueness_ratio,
+                                    params.speckle_window, params.speckle_range, params.mode);
 }
 
 cv::Mat SgbmMatcher::Compute(const cv::Mat& left, const cv::Mat& right) const {

@@ -11,14 +11,14 @@ struct SgbmParams {
   int min_disparity = 0;
   int num_disparities = 64;  // > 0, multiple of 16
   int block_size = 5;
-  int p1 = 8 * 3 * 25;       // smoothness penalties, as in the reference table (8*3*block^2)
+  int p1 = 8 * 3 * 25;  // smoothness penalties, as in the reference table (8*3*block^2)
   int p2 = 32 * 3 * 25;
   int uniqueness_ratio = 10;
   int speckle_window = 100;
   int speckle_range = 32;
-  int disp12_max_diff = 0;   // <= 0 disables the left-right check (OpenCV's default)
+  int disp12_max_diff = 0;  // <= 0 disables the left-right check (OpenCV's default)
   int pre_filter_cap = 0;
-  int mode = 3;              // cv::StereoSGBM::MODE_SGBM_3WAY
+  int mode = 3;  // cv::StereoSGBM::MODE_SGBM_3WAY
 
   // Throws std::invalid_argument with the reason if the values cannot work.
   void Validate() const;

@@ -16,8 +16,12 @@ inline std::filesystem::path EnvPath(const char* name, const char* fallback) {
   return std::filesystem::path(v && *v ? v : fallback);
 }
 
-inline std::filesystem::path BinDir() { return EnvPath("EPMAP_BIN_DIR", "build/bin"); }
-inline std::filesystem::path SourceDir() { return EnvPath("EPMAP_SOURCE_DIR", "."); }
+inline std::filesystem::path BinDir() {
+  return EnvPath("EPMAP_BIN_DIR", "build/bin");
+}
+inline std::filesystem::path SourceDir() {
+  return EnvPath("EPMAP_SOURCE_DIR", ".");
+}
 inline std::filesystem::path SharedDataDir() {
   return EnvPath("EPMAP_SHARED_DIR", "../shared") / "data";
 }
@@ -29,9 +33,9 @@ inline uint32_t UniqueDomainId(uint32_t salt = 0) {
 
 // A fresh empty folder under the system temp dir, removed by the caller if wanted.
 inline std::filesystem::path FreshTempDir(const std::string& tag) {
-  const auto dir = std::filesystem::temp_directory_path() /
-                   ("epmap-" + tag + "-" + std::to_string(::getpid()) + "-" +
-                    std::to_string(std::rand()));
+  const auto dir =
+      std::filesystem::temp_directory_path() /
+      ("epmap-" + tag + "-" + std::to_string(::getpid()) + "-" + std::to_string(std::rand()));
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;
@@ -41,10 +45,10 @@ inline std::filesystem::path FreshTempDir(const std::string& tag) {
 
 // Skips the current test with a clear message when ../shared/data is not there (a user's
 // machine without the project's shared data still passes the suite).
-#define EPMAP_REQUIRE_SHARED_DATA(relative)                                                  \
-  do {                                                                                       \
-    const auto _p = ::epmap::testing::SharedDataDir() / (relative);                         \
-    if (!std::filesystem::exists(_p)) {                                                      \
+#define EPMAP_REQUIRE_SHARED_DATA(relative)                                                    \
+  do {                                                                                         \
+    const auto _p = ::epmap::testing::SharedDataDir() / (relative);                            \
+    if (!std::filesystem::exists(_p)) {                                                        \
       GTEST_SKIP() << "shared data not found at " << _p << " (set EPMAP_SHARED_DIR); skipped"; \
-    }                                                                                        \
+    }                                                                                          \
   } while (0)

@@ -34,9 +34,7 @@ TEST(Pfm, RoundTripKeepsValuesAndUnknowns) {
 
 TEST(Pfm, RejectsGarbageWithReason) {
   const auto dir = testing::FreshTempDir("pfm-bad");
-  {
-    std::ofstream(dir / "bad.pfm") << "P6\n1 1\n255\nxyz";
-  }
+  { std::ofstream(dir / "bad.pfm") << "P6\n1 1\n255\nxyz"; }
   EXPECT_THROW(imaging::ReadPfm(dir / "bad.pfm"), std::runtime_error);
   EXPECT_THROW(imaging::ReadPfm(dir / "missing.pfm"), std::runtime_error);
   std::filesystem::remove_all(dir);
