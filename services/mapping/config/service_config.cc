@@ -15,12 +15,15 @@ namespace {
 // can be reported.
 class Section {
  public:
-  Section(const YAML::Node& node, std::string path) : node_(node), path_(std::move(path)) {
-    if (node_ && !node_.IsMap()) throw std::invalid_argument(path_ + ": expected a mapping");
+  // A missing or empty section (`robot:` with nothing under it) keeps every default.
+  Section(const YAML::Node& node, std::string path)
+      : node_(node), present_(node.IsDefined() && !node.IsNull()), path_(std::move(path)) {
+    if (present_ && !node_.IsMap()) throw std::invalid_argument(path_ + ": expected a mapping");
   }
+
   // Call after reading every known key: a key nobody read is a typo or a stale setting.
   void RejectUnknownKeys() const {
-    if (!node_) return;
+    if (!present_) return;
     for (const auto& kv : node_) {
       const auto key = kv.first.as<std::string>();
       if (!seen_.count(key)) {
@@ -32,9 +35,11 @@ class Section {
   template <class T>
   void Get(const std::string& key, T& out) {
     seen_.insert(key);
-    if (!node_ || !node_[key]) return;
+    if (!present_) return;
+    const YAML::Node value = node_[key];
+    if (!value.IsDefined() || value.IsNull()) return;
     try {
-      out = node_[key].as<T>();
+      out = value.as<T>();
     } catch (const YAML::Exception&) {
       throw std::invalid_argument("setting '" + Join(key) + "' has the wrong type");
     }
@@ -47,12 +52,13 @@ class Section {
   }
   Section Sub(const std::string& key) {
     seen_.insert(key);
-    return Section(node_ ? node_[key] : YAML::Node(), Join(key));
+    return Section(present_ ? node_[key] : YAML::Node(YAML::NodeType::Null), Join(key));
   }
 
  private:
   std::string Join(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
-  YAML::Node node_;
+  const YAML::Node node_;  // const: looking up a missing key must not create it
+  bool present_;
   std::string path_;
   std::set<std::string> seen_;
 };
@@ -194,9 +200,9 @@ ServiceConfig LoadServiceConfig(const std::filesystem::path& yaml_path) {
 std::string ToYaml(const ServiceConfig& c) {
   YAML::Emitter out;
   out << YAML::BeginMap;
-  out << YAML::Key << "api" << YAML::Value << YAML::BeginMap << YAML::Key << "listen"
-      << YAML::Value << c.listen << YAML::Key << "max_message_mb" << YAML::Value
-      << c.max_message_mb << YAML::EndMap;
+  out << YAML::Key << "api" << YAML::Value << YAML::BeginMap << YAML::Key << "listen" << YAML::Value
+      << c.listen << YAML::Key << "max_message_mb" << YAML::Value << c.max_message_mb
+      << YAML::EndMap;
   out << YAML::Key << "dds" << YAML::Value << YAML::BeginMap;
   out << YAML::Key << "domain" << YAML::Value << c.domain;
   out << YAML::Key << "shared_memory_transport" << YAML::Value << c.shared_memory_transport;
@@ -244,10 +250,10 @@ std::string ToYaml(const ServiceConfig& c) {
   out << YAML::Key << "pre_filter_cap" << YAML::Value << c.sgbm.pre_filter_cap;
   out << YAML::Key << "mode" << YAML::Value << c.sgbm.mode;
   out << YAML::EndMap;
-  out << YAML::Key << "state" << YAML::Value << YAML::BeginMap << YAML::Key << "dir"
-      << YAML::Value << c.state_dir << YAML::EndMap;
-  out << YAML::Key << "log" << YAML::Value << YAML::BeginMap << YAML::Key << "level"
-      << YAML::Value << c.log_level << YAML::EndMap;
+  out << YAML::Key << "state" << YAML::Value << YAML::BeginMap << YAML::Key << "dir" << YAML::Value
+      << c.state_dir << YAML::EndMap;
+  out << YAML::Key << "log" << YAML::Value << YAML::BeginMap << YAML::Key << "level" << YAML::Value
+      << c.log_level << YAML::EndMap;
   out << YAML::EndMap;
   return std::string(out.c_str()) + "\n";
 }
