@@ -47,10 +47,9 @@ std::pair<dds::CameraCalibration, dds::CameraCalibration> CameraInfosFor(
   } else {
     const std::string model =
         d.cam0.distortion_model == "equidistant" ? "equidistant" : "radial-tangential";
-    stereo::StereoRectifyFromExtrinsics(K(d.cam0), d.cam0.distortion, K(d.cam1), d.cam1.distortion,
-                                        ToCv(d.cam0.T_BS), ToCv(d.cam1.T_BS),
-                                        cv::Size(d.cam0.width, d.cam0.height), model, &left,
-                                        &right);
+    stereo::StereoRectifyFromExtrinsics(
+        K(d.cam0), d.cam0.distortion, K(d.cam1), d.cam1.distortion, ToCv(d.cam0.T_BS),
+        ToCv(d.cam1.T_BS), cv::Size(d.cam0.width, d.cam0.height), model, &left, &right);
   }
   return {FromParameters(left), FromParameters(right)};
 }

@@ -23,6 +23,10 @@ int main(int argc, char** argv) {
   app.add_option("--wait", options.wait_for_reader_s, "seconds to wait for readers to match")
       ->capture_default_str();
   app.add_flag("--restamp", options.restamp, "stamp messages with the wall clock");
+  app.add_option("--loop-for", options.loop_for_s,
+                 "replay again and again for this many seconds (restamps)");
+  app.add_option("--preload", options.preload_frames,
+                 "decode up to this many frames into memory before sending");
   app.add_option("--left-image-topic", options.topics.left_image)->capture_default_str();
   app.add_option("--right-image-topic", options.topics.right_image)->capture_default_str();
   app.add_option("--left-info-topic", options.topics.left_info)->capture_default_str();
@@ -38,9 +42,9 @@ int main(int argc, char** argv) {
               << (dataset.odometry.empty() ? "" : ", odometry") << " from " << path
               << "; waiting for readers on domain " << options.domain << "\n";
     const auto report = epmap::replay::Replay(dataset, options);
-    std::cerr << "epmap-replay: published " << report.frames << " frames, "
-              << report.joint_states << " joint states, " << report.odometry << " odometry in "
-              << report.seconds << " s\n";
+    std::cerr << "epmap-replay: published " << report.frames << " frames, " << report.joint_states
+              << " joint states, " << report.odometry << " odometry in " << report.seconds
+              << " s\n";
   } catch (const std::exception& e) {
     std::cerr << "epmap-replay: " << e.what() << "\n";
     return 1;

@@ -9,10 +9,14 @@
 #include <string>
 #include <vector>
 
-#include "tests/support/process.h"
+#include "common/process/child_process.h"
 #include "tests/support/test_env.h"
 
 namespace epmap::testing {
+
+using process::ChildProcess;
+using process::FreeTcpPort;
+using process::RunToCompletion;
 
 class Epmapd {
  public:

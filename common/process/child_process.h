@@ -1,7 +1,7 @@
 #pragma once
-// Runs a project binary as a real child process for end-to-end tests: start with arguments,
-// capture its output to a file, wait with a timeout, signal it. The destructor kills a child
-// that is still running, so a failing test never leaves processes behind.
+// Runs a project binary as a real child process (end-to-end tests, benchmarks): start with
+// arguments, capture its output to a file, wait with a timeout, signal it. The destructor kills a
+// child that is still running, so a failing test never leaves processes behind.
 
 #include <fcntl.h>
 #include <netinet/in.h>
@@ -21,7 +21,7 @@
 #include <thread>
 #include <vector>
 
-namespace epmap::testing {
+namespace epmap::process {
 
 class ChildProcess {
  public:
@@ -116,4 +116,4 @@ inline int FreeTcpPort() {
   return port;
 }
 
-}  // namespace epmap::testing
+}  // namespace epmap::process
