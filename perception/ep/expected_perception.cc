@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 #include <string>
@@ -41,6 +42,16 @@ void CheckPose(const Eigen::Isometry3d& T) {
   }
 }
 
+// Sets the columns outside [first, last] of `image` to `value`.
+void BlindMargins(int first, int last, cv::Mat* image, double value) {
+  const int w = image->cols;
+  if (first > 0) (*image)(cv::Rect(0, 0, std::min(first, w), image->rows)).setTo(value);
+  if (last + 1 < w) {
+    const int x = std::max(last + 1, 0);
+    (*image)(cv::Rect(x, 0, w - x, image->rows)).setTo(value);
+  }
+}
+
 }  // namespace
 
 const char* ToString(FrameMode mode) {
@@ -61,6 +72,7 @@ const char* ToString(FrameMode mode) {
 
 void EpParams::Validate() const {
   comparator.Validate();
+  stereo_check.Validate();
   sgbm.Validate();
   roi.Validate();
   if (refresh.every_n_frames < 0) throw std::invalid_argument("EP: every_n_frames must be >= 0");
@@ -71,8 +83,10 @@ void EpParams::Validate() const {
     throw std::invalid_argument("EP: the pose jump bounds must be > 0");
   }
   if (recompute_margin_px < 0) throw std::invalid_argument("EP: recompute_margin_px must be >= 0");
-  if (!(prediction.crack_max_step_px >= 0) || !(prediction.min_depth_m > 0)) {
-    throw std::invalid_argument("EP: crack_max_step_px must be >= 0 and min_depth_m > 0");
+  if (!(prediction.crack_max_step_px >= 0) || !(prediction.min_depth_m > 0) ||
+      !(prediction.splat_radius_px >= 0.5 && prediction.splat_radius_px < 1.0)) {
+    throw std::invalid_argument(
+        "EP: crack_max_step_px >= 0, min_depth_m > 0 and splat_radius_px in [0.5, 1) expected");
   }
 }
 
@@ -114,6 +128,8 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
                                 std::to_string(last_stamp_ns_));
   }
 
+  const int first_column = stereo_.first_matchable_column();
+  const int last_column = stereo_.last_matchable_column(size.width);
   auto res = std::make_shared<EpResult>();
   res->stamp_ns = stamp_ns;
   res->frame_index = frame_index_;
@@ -138,6 +154,10 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
       res->timings.predict_ms = MsSince(t0);
       t0 = Clock::now();
       cmp = Compare(pred.image, pred.holes == 0, pred.accumulated, left, params_.comparator);
+      if (params_.stereo_check.enabled) {
+        res->stereo_inconsistent =
+            CheckStereo(left, right, pred.disparity, params_.stereo_check).inconsistent;
+      }
       res->timings.compare_ms = MsSince(t0);
       res->compared = true;
     }
@@ -154,19 +174,34 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
       recompute = cmp.flagged.clone();
     }
     recompute |= pred.holes;
-    // Pixels SGBM left unmatched only because they lay in its blind left band (no room for the
-    // search range) are measured once they come out of it.
-    const int band = stereo_.first_matchable_column();
+    if (!res->stereo_inconsistent.empty()) recompute |= res->stereo_inconsistent;
+    if (params_.remeasure_dynamic) {
+      // Where something moved on its own last frame, the map's geometry is not to be trusted:
+      // re-measured whether or not E notices (the thing may have left a low-texture place).
+      cv::Mat dynamic;
+      cv::bitwise_and(pred.flags, cv::Scalar(kDynamic), dynamic);
+      if (params_.recompute_margin_px > 0 && cv::countNonZero(dynamic) > 0) {
+        const int k = 2 * params_.recompute_margin_px + 1;
+        cv::dilate(dynamic, dynamic, cv::getStructuringElement(cv::MORPH_RECT, {k, k}));
+      }
+      recompute.setTo(255, dynamic);
+    }
+    // Pixels left unmeasured only because they lay in one of SGBM's blind margins are measured
+    // once they come out of it ...
     for (int v = 0; v < size.height; ++v) {
-      const uint8_t* meas = pred.measured.ptr<uint8_t>(v);
+      const uint8_t* flags = pred.flags.ptr<uint8_t>(v);
       const float* src_x = pred.source_x.ptr<float>(v);
       uint8_t* rec = recompute.ptr<uint8_t>(v);
-      for (int u = band; u < size.width; ++u) {
-        if (!meas[u] && src_x[u] >= 0 && src_x[u] < band) rec[u] = 255;
+      for (int u = first_column; u <= last_column; ++u) {
+        if (!(flags[u] & kMeasured) && src_x[u] >= 0 &&
+            (src_x[u] < static_cast<float>(first_column) ||
+             src_x[u] > static_cast<float>(last_column))) {
+          rec[u] = 255;
+        }
       }
     }
-    // ... and pixels still inside that band are never worth a box: SGBM cannot match them.
-    recompute(cv::Rect(0, 0, std::min(band, size.width), size.height)).setTo(0);
+    // ... and pixels still inside them are never worth a box: SGBM cannot match them.
+    BlindMargins(first_column, last_column, &recompute, 0);
     const double share = cv::countNonZero(recompute) / n_pixels;
     const bool scheduled =
         refresh_requested_ ||
@@ -191,6 +226,10 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
     res->sgbm_boxes = stats.boxes;
   } else {
     res->disparity = stereo_.ComputeFull(left, right);
+    // SGBM's values in its blind margins are not kept (see RoiStereo::last_matchable_column);
+    // on predicted frames the margins are never recomputed, so the map keeps what it had there.
+    BlindMargins(first_column, last_column, &res->disparity,
+                 std::numeric_limits<double>::quiet_NaN());
     res->recompute = cv::Mat(size, CV_8U, cv::Scalar(255));
     res->recomputed_share = 1.0;
     res->stereo_area_share = 1.0;
@@ -254,9 +293,30 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
   } else {
     state_.points = filled_points;
   }
-  state_.measured = res->disparity > 0;  // false for NaN
+  state_.flags = cv::Mat(size, CV_8U, cv::Scalar(0));
+  state_.flags.setTo(kMeasured, res->disparity > 0);  // false for NaN
+  cv::Mat dynamic_flag = state_.flags | kDynamic;
+  dynamic_flag.copyTo(state_.flags, res->unexpected);
   state_.image = left.clone();
   state_.accumulated = res->accumulated;
+  if (mode == FrameMode::kPredicted && params_.history_reset_px > 0) {
+    // Errors explained by a wrong map are not history: forget them where the map changed.
+    const float margin = static_cast<float>(params_.history_reset_px);
+    cv::Mat changed(size, CV_8U, cv::Scalar(0));
+    for (int v = 0; v < size.height; ++v) {
+      const uint8_t* rec = res->recompute.ptr<uint8_t>(v);
+      const float* fresh = res->disparity.ptr<float>(v);
+      const float* predicted = pred.geometry.ptr<float>(v);
+      uint8_t* c = changed.ptr<uint8_t>(v);
+      for (int u = 0; u < size.width; ++u) {
+        if (rec[u] && std::abs(fresh[u] - predicted[u]) > margin) c[u] = 255;  // false for NaN
+      }
+    }
+    if (cv::countNonZero(changed) > 0) {
+      state_.accumulated = res->accumulated.clone();  // the result's C stays as published
+      state_.accumulated.setTo(0, changed);
+    }
+  }
   res->timings.fuse_ms = MsSince(t0);
 
   res->mode = mode;

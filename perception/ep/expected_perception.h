@@ -11,7 +11,8 @@
 //
 // Two masks come out: `unexpected` is the motion detector (something moved on its own: A above
 // the threshold where the prediction was valid), `recompute` is what SGBM was run on (unexpected
-// regions grown by a margin, plus holes: newly visible border and disocclusions).
+// regions grown by a margin, holes: newly visible border and disocclusions, and regions where
+// the predicted disparity disagrees with the current stereo pair: comparator/stereo_check.h).
 //
 // Use: one object per camera pipeline, Process() once per stereo frame, from one thread. Each
 // result is immutable and owns its images (nothing is shared with the object's later state), so
@@ -25,6 +26,7 @@
 #include <vector>
 
 #include "perception/ep/comparator/regions.h"
+#include "perception/ep/comparator/stereo_check.h"
 #include "perception/ep/comparator/visual_comparator.h"
 #include "perception/ep/generator/ep_generator.h"
 #include "perception/ep/update/roi_stereo.h"
@@ -43,6 +45,7 @@ struct RefreshPolicy {
 struct EpParams {
   PredictionParams prediction;
   ComparatorParams comparator;
+  StereoCheckParams stereo_check;
   stereo::SgbmParams sgbm;
   RoiStereoParams roi;
   RefreshPolicy refresh;
@@ -57,6 +60,17 @@ struct EpParams {
   // that moved is no longer there, so it is left out of the unexpected (motion) mask.
   // <= 0 disables this. Our addition, not in the paper.
   double uncovered_margin_px = 1.0;
+  // Pixels found unexpected are marked dynamic in the map; next frame, wherever the prediction
+  // comes from dynamic points, SGBM re-measures (a moving thing's geometry is stale at once, and
+  // where it leaves a low-texture surface neither E nor the stereo check would notice). Our
+  // addition, not in the paper.
+  bool remeasure_dynamic = true;
+  // Where SGBM, recomputing a region, finds the predicted disparity off by more than this, the
+  // accumulated error C there is reset to 0: the errors were the map's fault, not predictable
+  // noise, and C must not keep attenuating that place once the map is right (else a moving
+  // thing leaves a trail that the comparator has learnt to ignore: "burn-in"). <= 0 disables.
+  // Our addition, not in the paper.
+  double history_reset_px = 1.0;
 
   void Validate() const;  // std::invalid_argument with the reason
 };
@@ -72,7 +86,7 @@ const char* ToString(FrameMode mode);
 
 struct EpTimings {
   double predict_ms = 0;  // generator: D_-, L_-, C_-
-  double compare_ms = 0;  // comparator: E, C, A, threshold, specks
+  double compare_ms = 0;  // comparator: E, C, A, threshold, specks; stereo check
   double plan_ms = 0;     // recompute mask, unexpected mask, regions
   double stereo_ms = 0;   // SGBM (regions or full frame)
   double fuse_ms = 0;     // map update and the state for the next frame
@@ -93,6 +107,7 @@ struct EpResult {
   cv::Mat unexpected;           // CV_8U 255: moved on its own (the motion detector output)
   cv::Mat recompute;            // CV_8U 255: where SGBM gave fresh values (all 255 on full frames)
   cv::Mat holes;                // CV_8U 255: nothing predicted (empty when nothing was compared)
+  cv::Mat stereo_inconsistent;  // CV_8U 255: D_- disagrees with the pair (empty if not checked)
   std::vector<Region> regions;  // connected components of `unexpected`
 
   bool compared = false;         // E, A, means are meaningful
@@ -153,7 +168,7 @@ class ExpectedPerception {
   bool has_state_ = false;
   int64_t last_stamp_ns_ = 0;
   Eigen::Isometry3d last_T_base_cam0_ = Eigen::Isometry3d::Identity();
-  MapState state_;  // points of D^k (measured or filled), measured, L^k, C^k
+  MapState state_;  // points of D^k (measured or filled), their flags, L^k, C^k
 };
 
 }  // namespace epmap::ep

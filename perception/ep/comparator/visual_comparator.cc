@@ -12,18 +12,13 @@ void ComparatorParams::Validate() const {
   if (!(lambda >= 0)) throw std::invalid_argument("comparator: lambda must be >= 0");
   if (!(alpha >= 0)) throw std::invalid_argument("comparator: alpha must be >= 0");
   if (!(threshold_grey > 0)) throw std::invalid_argument("comparator: threshold must be > 0");
-  if (open_radius_px < 0 || min_region_area_px < 0) {
-    throw std::invalid_argument("comparator: open radius and minimum area must be >= 0");
+  if (open_radius_px < 0 || close_radius_px < 0 || min_region_area_px < 0) {
+    throw std::invalid_argument("comparator: radii and minimum area must be >= 0");
   }
 }
 
-namespace {
-
-// Robust least-squares fit actual ~ gain * predicted + offset over a grid of valid pixels: one
-// fit, then a refit without the pixels it explains worst (moving things, occlusions). Returns
-// (1, 0) when too few pixels are valid or the fit is implausible.
-std::pair<double, double> FitExposure(const cv::Mat& predicted, const cv::Mat& valid,
-                                      const cv::Mat& actual) {
+std::pair<double, double> FitGainOffset(const cv::Mat& predicted, const cv::Mat& valid,
+                                        const cv::Mat& actual) {
   constexpr int kStep = 4;
   std::vector<float> p, a;
   p.reserve(static_cast<size_t>(predicted.total() / (kStep * kStep)));
@@ -66,9 +61,8 @@ std::pair<double, double> FitExposure(const cv::Mat& predicted, const cv::Mat& v
   return {gain, offset};
 }
 
-}  // namespace
-
-cv::Mat RemoveSpecks(const cv::Mat& mask, int open_radius_px, int min_area_px) {
+cv::Mat RemoveSpecks(const cv::Mat& mask, int open_radius_px, int min_area_px,
+                     int close_radius_px) {
   cv::Mat out;
   if (open_radius_px > 0) {
     const cv::Mat k = cv::getStructuringElement(
@@ -76,6 +70,11 @@ cv::Mat RemoveSpecks(const cv::Mat& mask, int open_radius_px, int min_area_px) {
     cv::morphologyEx(mask, out, cv::MORPH_OPEN, k);
   } else {
     out = mask.clone();
+  }
+  if (close_radius_px > 0) {
+    const cv::Mat k = cv::getStructuringElement(
+        cv::MORPH_RECT, cv::Size(2 * close_radius_px + 1, 2 * close_radius_px + 1));
+    cv::morphologyEx(out, out, cv::MORPH_CLOSE, k);
   }
   if (min_area_px > 1) {
     cv::Mat labels, stats, centroids;
@@ -110,7 +109,7 @@ Comparison Compare(const cv::Mat& predicted, const cv::Mat& valid,
   }
   Comparison out;
   if (params.compensate_exposure) {
-    std::tie(out.gain, out.offset) = FitExposure(predicted, valid, actual);
+    std::tie(out.gain, out.offset) = FitGainOffset(predicted, valid, actual);
   }
   cv::Mat actual_f;
   actual.convertTo(actual_f, CV_32F);
@@ -126,13 +125,16 @@ Comparison Compare(const cv::Mat& predicted, const cv::Mat& valid,
   cv::exp(attenuation, attenuation);
   cv::multiply(out.error, attenuation, out.attenuated);
   // Unexpected: A above the threshold (Sec. IV-A), specks removed.
-  out.flagged = RemoveSpecks(out.attenuated > params.threshold_grey, params.open_radius_px,
-                             params.min_region_area_px);
+  const cv::Mat above = out.attenuated > params.threshold_grey;
+  out.flagged =
+      RemoveSpecks(above, params.open_radius_px, params.min_region_area_px, params.close_radius_px);
   // C = (E + lambda C_-) / (lambda + 1) (Sec. IV-A); no history where nothing was predicted.
   cv::addWeighted(out.error, 1.0 / (params.lambda + 1.0), predicted_accumulated,
                   params.lambda / (params.lambda + 1.0), 0.0, out.accumulated);
   out.accumulated.setTo(0, invalid);
-  if (!params.accumulate_unexpected) predicted_accumulated.copyTo(out.accumulated, out.flagged);
+  // Every pixel above the threshold (specks included: a speck removed from the output is still
+  // an unexpected error, not predictable noise) keeps its history unchanged.
+  if (!params.accumulate_unexpected) predicted_accumulated.copyTo(out.accumulated, above);
   out.valid_pixels = cv::countNonZero(valid);
   if (out.valid_pixels > 0) {
     out.mean_error = cv::mean(out.error, valid)[0];

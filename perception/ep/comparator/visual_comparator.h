@@ -22,20 +22,24 @@
 //   - speck removal (opening, minimum area) on the thresholded A.
 
 #include <opencv2/core.hpp>
+#include <utility>
 
 namespace epmap::ep {
 
 struct ComparatorParams {
   double lambda = 10.0;          // forgetting factor of the accumulated error (Sec. IV-A)
   double alpha = 0.1;            // attenuation strength (Sec. IV-A)
-  double threshold_grey = 20.0;  // A above this is unexpected (not in the paper)
+  double threshold_grey = 15.0;  // A above this is unexpected (not in the paper)
   bool compensate_exposure = true;
   int open_radius_px = 1;       // opening of the thresholded A (0 = none)
+  int close_radius_px = 5;      // then closing: joins the fragments of one textured thing
   int min_region_area_px = 40;  // connected components smaller than this are dropped
-  // Whether pixels found unexpected feed their error into C (the paper: yes). Excluding them
-  // keeps a moving object from attenuating itself while it lingers; persistent noise is still
-  // accumulated where it stays below the threshold or forms specks.
-  bool accumulate_unexpected = true;
+  // Whether pixels found unexpected feed their error into C (the paper: yes; true restores it).
+  // Excluding them keeps a moving object from attenuating itself within a few frames while it
+  // overlaps its previous position (measured on the head scenario: with the paper's choice the
+  // toy's mask shrinks to its leading edge); persistent noise is still accumulated where it
+  // stays below the threshold or forms specks.
+  bool accumulate_unexpected = false;
 
   void Validate() const;  // std::invalid_argument with the reason
 };
@@ -57,7 +61,16 @@ Comparison Compare(const cv::Mat& predicted, const cv::Mat& valid,
                    const cv::Mat& predicted_accumulated, const cv::Mat& actual,
                    const ComparatorParams& params = {});
 
-// Opening by a (2r+1)^2 square, then removal of 8-connected components smaller than min_area.
-cv::Mat RemoveSpecks(const cv::Mat& mask, int open_radius_px, int min_area_px);
+// Robust least-squares fit actual ~ gain * predicted + offset over a grid of the valid pixels
+// (one fit, then a refit without the pixels it explains worst). (1, 0) when too few pixels are
+// valid or the fit is implausible (gain outside 0.5..2). predicted: CV_32F, valid and actual:
+// CV_8U.
+std::pair<double, double> FitGainOffset(const cv::Mat& predicted, const cv::Mat& valid,
+                                        const cv::Mat& actual);
+
+// Opening by a (2r+1)^2 square, then closing by a (2c+1)^2 square, then removal of 8-connected
+// components smaller than min_area.
+cv::Mat RemoveSpecks(const cv::Mat& mask, int open_radius_px, int min_area_px,
+                     int close_radius_px = 0);
 
 }  // namespace epmap::ep

@@ -1,9 +1,10 @@
 #pragma once
 // Gives every pixel SGBM left unmatched a disparity to move with, so that the prediction
 // covers them too (a map whose unknowns never moved would turn them into holes, and holes are
-// recomputed: the EP would recompute SGBM's failures every frame). The fill is background-
-// preferring along each row (the smaller of the nearest valid disparities to the left and to
-// the right), the usual choice for occlusions, which are SGBM's main failures. Filled pixels
+// recomputed: the EP would recompute SGBM's failures every frame). Along each row, a gap whose
+// two ends differ by at most 2 px (one surface) is interpolated linearly; any other gap takes
+// the smaller of its two ends (background-preferring, the usual choice for occlusions, which
+// are SGBM's main failures). Filled pixels
 // stay marked as unknown in the map's output; only their motion uses the fill.
 
 #include <opencv2/core.hpp>

@@ -1,10 +1,13 @@
 #include "perception/ep/generator/ep_generator.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
+#include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
+#include <vector>
 
 namespace epmap::ep {
 
@@ -26,8 +29,8 @@ void CheckInputs(const MapState& s, const stereo::RectifiedGeometry& camera,
   if (s.points.type() != CV_32FC3 || s.points.size() != size) {
     throw std::invalid_argument("EP generator: points must be CV_32FC3 of the camera's size");
   }
-  if (s.measured.type() != CV_8UC1 || s.measured.size() != size) {
-    throw std::invalid_argument("EP generator: measured must be CV_8UC1 of the camera's size");
+  if (s.flags.type() != CV_8UC1 || s.flags.size() != size) {
+    throw std::invalid_argument("EP generator: flags must be CV_8UC1 of the camera's size");
   }
   if (s.image.type() != CV_8UC1 || s.image.size() != size) {
     throw std::invalid_argument("EP generator: image must be CV_8UC1 of the camera's size");
@@ -38,8 +41,228 @@ void CheckInputs(const MapState& s, const stereo::RectifiedGeometry& camera,
   if (!T.matrix().allFinite()) throw std::invalid_argument("EP generator: motion is not finite");
 }
 
-bool Finite(const cv::Vec3f& p) {
-  return std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]);
+// The working state of one prediction: the moved points, their flags and their disparities
+// (0 = empty), all of one frame's size.
+struct Splat {
+  int W = 0, H = 0;
+  float fx = 0, fy = 0, cx = 0, cy = 0, fb = 0;
+  cv::Mat points;     // CV_32FC3
+  cv::Mat flags;      // CV_8U
+  cv::Mat disparity;  // CV_32F, fb / z of the point held, 0 = empty
+
+  void Set(int u, int v, float x, float y, float z, uint8_t f) {
+    float* p = points.ptr<float>(v) + 3 * u;
+    p[0] = x;
+    p[1] = y;
+    p[2] = z;
+    flags.at<uint8_t>(v, u) = f;
+    disparity.at<float>(v, u) = fb / z;
+  }
+  // The point on pixel (u, v)'s ray at disparity d.
+  void SetOnRay(int u, int v, float d, uint8_t f) {
+    const float z = fb / d;
+    Set(u, v, (static_cast<float>(u) - cx) / fx * z, (static_cast<float>(v) - cy) / fy * z, z, f);
+  }
+};
+
+// See Predict: empty pixels take a neighbour's point when its projection is near enough.
+void ExtendFootprints(const PredictionParams& params, const cv::Mat& offset, Splat* s) {
+  struct Copy {
+    int u, v, from_u, from_v;
+  };
+  const float radius = static_cast<float>(params.splat_radius_px);
+  const float max_step = static_cast<float>(params.crack_max_step_px);
+  const int H = s->H, W = s->W;
+  std::vector<std::vector<Copy>> copies(static_cast<size_t>(H));
+  cv::parallel_for_(cv::Range(0, H), [&](const cv::Range& rows) {
+    for (int v = rows.start; v < rows.end; ++v) {
+      const float* d_mid = s->disparity.ptr<float>(v);
+      for (int u = 0; u < W; ++u) {
+        if (d_mid[u] > 0) continue;
+        int best_u = -1, best_v = -1;
+        float best_d = 0, best_dist2 = 1e30F;
+        for (int dv = -1; dv <= 1; ++dv) {
+          const int vn = v + dv;
+          if (vn < 0 || vn >= H) continue;
+          const float* d_row = s->disparity.ptr<float>(vn);
+          const float* o_row = offset.ptr<float>(vn);
+          for (int du = -1; du <= 1; ++du) {
+            const int un = u + du;
+            if (un < 0 || un >= W || !(d_row[un] > 0)) continue;
+            // The neighbour's projection relative to this pixel's centre.
+            const float ou = o_row[2 * un] + static_cast<float>(du);
+            const float ov = o_row[2 * un + 1] + static_cast<float>(dv);
+            if (std::abs(ou) > radius || std::abs(ov) > radius) continue;
+            const float d = d_row[un], dist2 = ou * ou + ov * ov;
+            const bool better =
+                best_u < 0 || (std::abs(d - best_d) > max_step ? d > best_d : dist2 < best_dist2);
+            if (better) {
+              best_u = un;
+              best_v = vn;
+              best_d = d;
+              best_dist2 = dist2;
+            }
+          }
+        }
+        if (best_u >= 0) copies[static_cast<size_t>(v)].push_back({u, v, best_u, best_v});
+      }
+    }
+  });
+  for (const auto& row : copies) {
+    for (const Copy& c : row) {
+      const float* p = s->points.ptr<float>(c.from_v) + 3 * c.from_u;
+      s->Set(c.u, c.v, p[0], p[1], p[2], s->flags.at<uint8_t>(c.from_v, c.from_u));
+    }
+  }
+}
+
+// Cracks: an empty pixel whose 8 neighbours hold at least three points of one surface
+// (disparities within crack_max_step_px) gets their average point, measured if most of them
+// are ("any unmeasured neighbour" would let the unknowns of the map spread into the
+// measurements a little more at every frame), dynamic if any of them is (the conservative
+// side: dynamic points are re-measured). An empty pixel between two surfaces stays a hole: it
+// may be a disocclusion, SGBM must look at it. Fills are decided on the splat alone, then
+// written.
+void FillCracks(const PredictionParams& params, Splat* s) {
+  struct Fill {
+    int u, v;
+    float x, y, z;
+    uint8_t flags;
+  };
+  const float max_step = static_cast<float>(params.crack_max_step_px);
+  const int H = s->H, W = s->W;
+  std::vector<std::vector<Fill>> fills(static_cast<size_t>(H));
+  cv::parallel_for_(cv::Range(1, H - 1), [&](const cv::Range& rows) {
+    for (int v = rows.start; v < rows.end; ++v) {
+      const float* d_mid = s->disparity.ptr<float>(v);
+      for (int u = 1; u + 1 < W; ++u) {
+        if (d_mid[u] > 0) continue;
+        float sx = 0, sy = 0, sz = 0, d_min = 1e30F, d_max = -1e30F;
+        int n = 0, n_measured = 0;
+        uint8_t dynamic = 0;
+        for (int dv = -1; dv <= 1; ++dv) {
+          const float* d_row = s->disparity.ptr<float>(v + dv);
+          const float* p_row = s->points.ptr<float>(v + dv);
+          const uint8_t* f_row = s->flags.ptr<uint8_t>(v + dv);
+          for (int du = -1; du <= 1; ++du) {
+            const float d = d_row[u + du];
+            if (!(d > 0)) continue;
+            d_min = std::min(d_min, d);
+            d_max = std::max(d_max, d);
+            sx += p_row[3 * (u + du)];
+            sy += p_row[3 * (u + du) + 1];
+            sz += p_row[3 * (u + du) + 2];
+            ++n;
+            n_measured += (f_row[u + du] & kMeasured) ? 1 : 0;
+            dynamic |= f_row[u + du] & kDynamic;
+          }
+        }
+        if (n >= 3 && d_max - d_min <= max_step) {
+          const float inv = 1.0F / static_cast<float>(n);
+          fills[static_cast<size_t>(v)].push_back(
+              {u, v, sx * inv, sy * inv, sz * inv,
+               static_cast<uint8_t>((2 * n_measured > n ? kMeasured : 0) | dynamic)});
+        }
+      }
+    }
+  });
+  for (const auto& row : fills) {
+    for (const Fill& f : row) s->Set(f.u, f.v, f.x, f.y, f.z, f.flags);
+  }
+}
+
+// Small holes inside the image (components of at most max_hole_fill_px pixels not touching the
+// border: wider cracks, slivers uncovered behind an edge) are filled along their row from the
+// nearest points on either side: linearly between two ends of one surface (within 2 px of
+// disparity), else with the farther end (what an edge uncovers is background). The fill counts
+// as measured only when it interpolates one measured surface. Large holes and the newly visible
+// border stay holes: only SGBM can tell what is there.
+void FillSmallHoles(const PredictionParams& params, Splat* s) {
+  constexpr float kSameSurfacePx = 2.0F;
+  const int W = s->W, H = s->H;
+  const cv::Mat holes = s->disparity <= 0;
+  cv::Mat labels, stats, centroids;
+  const int n = cv::connectedComponentsWithStats(holes, labels, stats, centroids, 8, CV_32S);
+  std::vector<uint8_t> small(static_cast<size_t>(n), 0);
+  bool any = false;
+  for (int i = 1; i < n; ++i) {
+    const int x = stats.at<int>(i, cv::CC_STAT_LEFT), y = stats.at<int>(i, cv::CC_STAT_TOP);
+    const int w = stats.at<int>(i, cv::CC_STAT_WIDTH), h = stats.at<int>(i, cv::CC_STAT_HEIGHT);
+    const bool border = x == 0 || y == 0 || x + w == W || y + h == H;
+    small[static_cast<size_t>(i)] =
+        !border && stats.at<int>(i, cv::CC_STAT_AREA) <= params.max_hole_fill_px;
+    any |= small[static_cast<size_t>(i)] != 0;
+  }
+  if (!any) return;
+  const auto is_small = [&](int label) { return label != 0 && small[static_cast<size_t>(label)]; };
+  for (int v = 0; v < H; ++v) {
+    const int* lab = labels.ptr<int>(v);
+    float* disp = s->disparity.ptr<float>(v);
+    uint8_t* f = s->flags.ptr<uint8_t>(v);
+    int u = 0;
+    while (u < W) {
+      if (!is_small(lab[u])) {
+        ++u;
+        continue;
+      }
+      // A run of small-hole pixels on this row, [begin, end), and the points beside it (a run
+      // may also end at another hole).
+      const int begin = u;
+      while (u < W && is_small(lab[u])) ++u;
+      const int end = u;
+      const float d_left = begin > 0 ? disp[begin - 1] : 0.0F;
+      const float d_right = end < W ? disp[end] : 0.0F;
+      if (!(d_left > 0) && !(d_right > 0)) continue;  // between holes: stays a hole
+      const uint8_t f_left = d_left > 0 ? f[begin - 1] : 0, f_right = d_right > 0 ? f[end] : 0;
+      const bool one_surface =
+          d_left > 0 && d_right > 0 && std::abs(d_left - d_right) <= kSameSurfacePx;
+      for (int i = begin; i < end; ++i) {
+        if (one_surface) {
+          const float t = static_cast<float>(i - begin + 1) / static_cast<float>(end - begin + 1);
+          s->SetOnRay(i, v, d_left * (1 - t) + d_right * t,
+                      static_cast<uint8_t>((f_left & f_right & kMeasured) |
+                                           ((f_left | f_right) & kDynamic)));
+        } else {
+          const bool take_left = d_left > 0 && (!(d_right > 0) || d_left < d_right);
+          // A guess at what was uncovered: not a measurement.
+          s->SetOnRay(i, v, take_left ? d_left : d_right,
+                      static_cast<uint8_t>((f_left | f_right) & kDynamic));
+        }
+      }
+    }
+  }
+}
+
+// Points of smooth surfaces (all 8 neighbours within crack_max_step_px of disparity) are moved
+// onto their pixel centre's ray, depth kept. Exact positions only matter at depth edges (where
+// they let an edge move by fractions of a pixel); elsewhere a regular lattice keeps one point
+// per pixel, where drifting sub-pixel offsets would collide here and leave gaps there. The
+// image prediction is unaffected: it samples through each pixel centre's depth.
+void ResnapSmoothPoints(const PredictionParams& params, Splat* s) {
+  const float max_step = static_cast<float>(params.crack_max_step_px);
+  // Only x and y change, and only disparities are read: rows run in parallel, in place.
+  cv::parallel_for_(cv::Range(1, s->H - 1), [&](const cv::Range& rows) {
+    for (int v = rows.start; v < rows.end; ++v) {
+      float* row = s->points.ptr<float>(v);
+      const float* d_up = s->disparity.ptr<float>(v - 1);
+      const float* d_mid = s->disparity.ptr<float>(v);
+      const float* d_down = s->disparity.ptr<float>(v + 1);
+      const float ray_y = (static_cast<float>(v) - s->cy) / s->fy;
+      for (int u = 1; u + 1 < s->W; ++u) {
+        const float d = d_mid[u];
+        if (!(d > 0)) continue;
+        // Empty neighbours (0) make the minimum fail.
+        const float lo = std::min({d_up[u - 1], d_up[u], d_up[u + 1], d_mid[u - 1], d_mid[u + 1],
+                                   d_down[u - 1], d_down[u], d_down[u + 1]});
+        const float hi = std::max({d_up[u - 1], d_up[u], d_up[u + 1], d_mid[u - 1], d_mid[u + 1],
+                                   d_down[u - 1], d_down[u], d_down[u + 1]});
+        if (!(lo >= d - max_step && hi <= d + max_step)) continue;
+        const float z = row[3 * u + 2];
+        row[3 * u] = (static_cast<float>(u) - s->cx) / s->fx * z;
+        row[3 * u + 1] = ray_y * z;
+      }
+    }
+  });
 }
 
 }  // namespace
@@ -73,137 +296,145 @@ Prediction Predict(const MapState& previous, const Eigen::Isometry3d& T_cur_prev
                    const stereo::RectifiedGeometry& camera, const PredictionParams& params) {
   CheckInputs(previous, camera, T_cur_prev);
   const int W = camera.width, H = camera.height;
-  const double fx = camera.fx, fy = camera.fy, cx = camera.cx, cy = camera.cy;
-  const double fb = camera.fx * camera.baseline_m;  // z = fb / d
+  Splat s;
+  s.W = W;
+  s.H = H;
+  s.fx = static_cast<float>(camera.fx);
+  s.fy = static_cast<float>(camera.fy);
+  s.cx = static_cast<float>(camera.cx);
+  s.cy = static_cast<float>(camera.cy);
+  s.fb = static_cast<float>(camera.fx * camera.baseline_m);  // z = fb / d
+  const float fx = s.fx, fy = s.fy, cx = s.cx, cy = s.cy, fb = s.fb;
   const Eigen::Matrix3f R = T_cur_prev.linear().cast<float>();
-  const Eigen::Vector3f t = T_cur_prev.translation().cast<float>();
+  const float r00 = R(0, 0), r01 = R(0, 1), r02 = R(0, 2);
+  const float r10 = R(1, 0), r11 = R(1, 1), r12 = R(1, 2);
+  const float r20 = R(2, 0), r21 = R(2, 1), r22 = R(2, 2);
+  const float tx = static_cast<float>(T_cur_prev.translation().x());
+  const float ty = static_cast<float>(T_cur_prev.translation().y());
+  const float tz = static_cast<float>(T_cur_prev.translation().z());
   const float min_depth = static_cast<float>(params.min_depth_m);
+  const float max_step = static_cast<float>(params.crack_max_step_px);
 
-  Prediction out;
   // 1. p_D (Sec. IV-B): every point X of frame k becomes X' = R X + t in frame k+1 and lands on
-  //    the pixel nearest to its projection; the nearest point wins (z-buffer on depth).
-  out.points = cv::Mat(H, W, CV_32FC3, cv::Scalar(kNaN, kNaN, kNaN));
-  out.measured = cv::Mat(H, W, CV_8U, cv::Scalar(0));
+  //    the pixel nearest to its projection. Between two surfaces the nearer point wins
+  //    (z-buffer); on one surface, the point nearer to the pixel centre (which keeps one point
+  //    per pixel where the lattice of exact points is slightly irregular). Sequential: points of
+  //    any row may land on any row.
+  s.points = cv::Mat(H, W, CV_32FC3, cv::Scalar(kNaN, kNaN, kNaN));
+  s.flags = cv::Mat(H, W, CV_8U, cv::Scalar(0));
+  s.disparity = cv::Mat(H, W, CV_32F, cv::Scalar(0));
+  cv::Mat offset(H, W, CV_32FC2);              // projection minus pixel centre of the point held
+  float* dst_points = s.points.ptr<float>(0);  // all freshly allocated: continuous
+  uint8_t* dst_flags = s.flags.ptr<uint8_t>(0);
+  float* dst_disp = s.disparity.ptr<float>(0);
+  float* dst_offset = offset.ptr<float>(0);
   for (int v = 0; v < H; ++v) {
-    const auto* src = previous.points.ptr<cv::Vec3f>(v);
-    const uint8_t* m = previous.measured.ptr<uint8_t>(v);
-    for (int u = 0; u < W; ++u) {
-      if (!Finite(src[u])) continue;
-      const Eigen::Vector3f X = R * Eigen::Vector3f(src[u][0], src[u][1], src[u][2]) + t;
-      if (!(X.z() > min_depth)) continue;  // behind the new camera (or NaN)
-      const double u1 = fx * X.x() / X.z() + cx, v1 = fy * X.y() / X.z() + cy;
+    const float* src = previous.points.ptr<float>(v);
+    const uint8_t* m = previous.flags.ptr<uint8_t>(v);
+    for (int u = 0; u < W; ++u, src += 3) {
+      const float px = src[0], py = src[1], pz = src[2];
+      if (!(pz > 0) || !std::isfinite(px) || !std::isfinite(py) || !std::isfinite(pz)) continue;
+      const float x = r00 * px + r01 * py + r02 * pz + tx;
+      const float y = r10 * px + r11 * py + r12 * pz + ty;
+      const float z = r20 * px + r21 * py + r22 * pz + tz;
+      if (!(z > min_depth)) continue;  // behind the new camera (or NaN)
+      const float inv_z = 1.0F / z;
+      const float u1 = fx * x * inv_z + cx, v1 = fy * y * inv_z + cy;
       // Outside the image (the comparisons are false for NaN, too).
-      if (!(u1 > -0.5 && v1 > -0.5 && u1 < W - 0.5 && v1 < H - 0.5)) continue;
-      const int ui = static_cast<int>(u1 + 0.5), vi = static_cast<int>(v1 + 0.5);
-      cv::Vec3f& dst = out.points.at<cv::Vec3f>(vi, ui);
-      bool wins = !(dst[2] > 0);  // empty
-      if (!wins) {
-        const double d_new = fb / X.z(), d_old = fb / dst[2];
-        if (std::abs(d_new - d_old) > params.crack_max_step_px) {
-          wins = d_new > d_old;  // different surfaces: the nearer one hides the other
-        } else {
-          // One surface: the point nearer to the pixel centre keeps the grid regular (else
-          // collisions here and gaps next door would multiply frame after frame).
-          const double du_old = fx * dst[0] / dst[2] + cx - ui,
-                       dv_old = fy * dst[1] / dst[2] + cy - vi;
-          wins = (u1 - ui) * (u1 - ui) + (v1 - vi) * (v1 - vi) < du_old * du_old + dv_old * dv_old;
-        }
-      }
+      if (!(u1 > -0.5F && v1 > -0.5F && u1 < W - 0.5F && v1 < H - 0.5F)) continue;
+      const int ui = static_cast<int>(u1 + 0.5F), vi = static_cast<int>(v1 + 0.5F);
+      const size_t idx = static_cast<size_t>(vi) * static_cast<size_t>(W) + static_cast<size_t>(ui);
+      const float du = u1 - static_cast<float>(ui), dv = v1 - static_cast<float>(vi);
+      const float d_new = fb * inv_z;
+      const float d_old = dst_disp[idx];  // 0 when empty
+      float* off = dst_offset + 2 * idx;
+      const bool wins = std::abs(d_new - d_old) > max_step
+                            ? d_new > d_old
+                            : du * du + dv * dv < off[0] * off[0] + off[1] * off[1];
       if (wins) {
-        dst = cv::Vec3f(X.x(), X.y(), X.z());
-        out.measured.at<uint8_t>(vi, ui) = m[u];
+        float* dst = dst_points + 3 * idx;
+        dst[0] = x;
+        dst[1] = y;
+        dst[2] = z;
+        dst_flags[idx] = m[u];
+        dst_disp[idx] = d_new;
+        off[0] = du;
+        off[1] = dv;
       }
     }
   }
-  // Cracks: an empty pixel whose neighbours (8-connected) hold at least three points of one
-  // surface (disparities within crack_max_step_px) gets their average point, measured if most
-  // of them are. An empty pixel
-  // between two surfaces stays a hole: it may be a disocclusion, SGBM must look at it.
-  const cv::Mat splat = out.points.clone();
-  const cv::Mat splat_measured = out.measured.clone();
-  for (int v = 1; v + 1 < H; ++v) {
-    auto* dst = out.points.ptr<cv::Vec3f>(v);
-    uint8_t* meas = out.measured.ptr<uint8_t>(v);
-    for (int u = 1; u + 1 < W; ++u) {
-      if (dst[u][2] > 0) continue;
-      cv::Vec3f sum(0, 0, 0);
-      int n = 0, n_measured = 0;
-      double d_min = 1e30, d_max = -1e30;
-      for (int dv = -1; dv <= 1; ++dv) {
-        const auto* row = splat.ptr<cv::Vec3f>(v + dv);
-        const uint8_t* mrow = splat_measured.ptr<uint8_t>(v + dv);
-        for (int du = -1; du <= 1; ++du) {
-          const cv::Vec3f& p = row[u + du];
-          if (!(p[2] > 0)) continue;
-          const double d = fb / p[2];
-          d_min = std::min(d_min, d);
-          d_max = std::max(d_max, d);
-          sum += p;
-          ++n;
-          n_measured += mrow[u + du] ? 1 : 0;
-        }
-      }
-      if (n >= 3 && d_max - d_min <= params.crack_max_step_px) {
-        dst[u] = sum * (1.0F / static_cast<float>(n));
-        // Measured if most neighbours are: "any unmeasured neighbour" would let the unknowns
-        // of the map spread into the measurements a little more at every frame.
-        meas[u] = 2 * n_measured > n ? 255 : 0;
-      }
-    }
-  }
+  // ... and an empty pixel takes the best point held by a neighbour whose projection lies
+  // within splat_radius_px of its own centre (a footprint of 1.5 px: the lattice of exact points
+  // is slightly irregular, and nearest-pixel splatting alone leaves gaps next to collisions).
+  if (params.splat_radius_px > 0.5) ExtendFootprints(params, offset, &s);
+  FillCracks(params, &s);
+  if (params.max_hole_fill_px > 0) FillSmallHoles(params, &s);
+  if (params.resnap_smooth_points) ResnapSmoothPoints(params, &s);
 
   // 2. p(L^k; T^{k+1}, D_-^{k+1}) and p(C^k; ...) (Sec. IV-A): each pixel centre of frame k+1 is
   //    back-projected at its point's depth, X' = z ray(u, v), moved back into frame k,
   //    X = R^T (X' - t), and projected there: q = pi(X). L^k and C^k are sampled at q.
+  Prediction out;
   out.disparity.create(H, W, CV_32F);
   out.geometry.create(H, W, CV_32F);
   out.holes.create(H, W, CV_8U);
   cv::Mat map_x(H, W, CV_32F), map_y(H, W, CV_32F);
-  const Eigen::Matrix3f Rt = R.transpose();
-  int non_finite = 0;
-  for (int v = 0; v < H; ++v) {
-    auto* pts = out.points.ptr<cv::Vec3f>(v);
-    float* disp = out.disparity.ptr<float>(v);
-    float* geo = out.geometry.ptr<float>(v);
-    uint8_t* meas = out.measured.ptr<uint8_t>(v);
-    uint8_t* hole = out.holes.ptr<uint8_t>(v);
-    float* mx = map_x.ptr<float>(v);
-    float* my = map_y.ptr<float>(v);
-    const float ray_y = static_cast<float>((v - cy) / fy);
-    for (int u = 0; u < W; ++u) {
-      bool ok = false;
-      const float z = pts[u][2];
-      if (z > min_depth) {
-        const Eigen::Vector3f Xp(static_cast<float>((u - cx) / fx) * z, ray_y * z, z);
-        const Eigen::Vector3f X = Rt * (Xp - t);
-        const float qx = static_cast<float>(fx * X.x() / X.z() + cx);
-        const float qy = static_cast<float>(fy * X.y() / X.z() + cy);
-        const float d = static_cast<float>(fb / z);
-        if (!std::isfinite(qx) || !std::isfinite(qy) || !std::isfinite(d) || !Finite(pts[u])) {
-          ++non_finite;  // a point was there but the arithmetic broke down
-        } else if (X.z() > min_depth && qx >= 0 && qy >= 0 && qx <= static_cast<float>(W - 1) &&
-                   qy <= static_cast<float>(H - 1)) {
-          mx[u] = qx;
-          my[u] = qy;
-          geo[u] = d;
-          disp[u] = meas[u] ? d : kNaN;
-          hole[u] = 0;
-          ok = true;
+  std::atomic<int> non_finite{0};
+  cv::parallel_for_(cv::Range(0, H), [&](const cv::Range& rows) {
+    int broken = 0;
+    for (int v = rows.start; v < rows.end; ++v) {
+      float* pts = s.points.ptr<float>(v);
+      float* disp = out.disparity.ptr<float>(v);
+      float* geo = out.geometry.ptr<float>(v);
+      uint8_t* flags = s.flags.ptr<uint8_t>(v);
+      uint8_t* hole = out.holes.ptr<uint8_t>(v);
+      float* mx = map_x.ptr<float>(v);
+      float* my = map_y.ptr<float>(v);
+      const float ray_y = (static_cast<float>(v) - cy) / fy;
+      for (int u = 0; u < W; ++u) {
+        float* p = pts + 3 * u;
+        bool ok = false;
+        const float z = p[2];
+        if (z > min_depth) {
+          // X' - t, then R^T.
+          const float ax = (static_cast<float>(u) - cx) / fx * z - tx;
+          const float ay = ray_y * z - ty;
+          const float az = z - tz;
+          const float x = r00 * ax + r10 * ay + r20 * az;
+          const float y = r01 * ax + r11 * ay + r21 * az;
+          const float zk = r02 * ax + r12 * ay + r22 * az;
+          const float qx = fx * x / zk + cx, qy = fy * y / zk + cy;
+          const float d = fb / z;
+          if (!std::isfinite(qx) || !std::isfinite(qy) || !std::isfinite(d) ||
+              !std::isfinite(p[0]) || !std::isfinite(p[1])) {
+            ++broken;  // a point was there but the arithmetic broke down
+          } else if (zk > min_depth && qx >= 0 && qy >= 0 && qx <= static_cast<float>(W - 1) &&
+                     qy <= static_cast<float>(H - 1)) {
+            mx[u] = qx;
+            my[u] = qy;
+            geo[u] = d;
+            disp[u] = (flags[u] & kMeasured) ? d : kNaN;
+            hole[u] = 0;
+            ok = true;
+          }
+        }
+        if (!ok) {
+          // Nothing of frame k explains this pixel (or its sample would lie outside frame k).
+          mx[u] = -1.0F;
+          my[u] = -1.0F;
+          geo[u] = kNaN;
+          disp[u] = kNaN;
+          hole[u] = 255;
+          flags[u] = 0;
+          p[0] = p[1] = p[2] = kNaN;
         }
       }
-      if (!ok) {
-        // Nothing of frame k explains this pixel (or its sample would lie outside frame k).
-        mx[u] = -1.0F;
-        my[u] = -1.0F;
-        geo[u] = kNaN;
-        disp[u] = kNaN;
-        hole[u] = 255;
-        meas[u] = 0;
-        pts[u] = cv::Vec3f(kNaN, kNaN, kNaN);
-      }
     }
-  }
+    non_finite += broken;
+  });
   out.non_finite_rejected = non_finite;
+  out.points = s.points;
+  out.flags = s.flags;
 
   cv::Mat image_k;
   previous.image.convertTo(image_k, CV_32F);  // interpolate in float: no rounding of L_-
@@ -213,6 +444,7 @@ Prediction Predict(const MapState& previous, const Eigen::Isometry3d& T_cur_prev
   // A non-finite C^k value would spread through the bilinear sample: never let it through.
   cv::patchNaNs(out.accumulated, 0.0);
   out.source_x = map_x;
+  out.source_y = map_y;
   return out;
 }
 

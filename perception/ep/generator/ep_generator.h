@@ -8,37 +8,59 @@
 // disocclusions).
 //
 // The map is kept as one 3-D point per pixel (camera frame), not as a disparity at the pixel
-// centre: p_D moves each point rigidly by T_{k+1,k} and re-projects it; the nearest point wins
-// a pixel (z-buffer); single-pixel cracks between points of one surface are closed by
-// averaging. Points keep their exact positions from frame to frame, so a depth edge moves with
-// the camera by fractions of a pixel per frame; re-deriving the points from pixel centres each
-// frame (our first version) rounds every edge back onto the grid each frame, and under slow
-// motion the predicted edges stayed put while the real ones moved (measured: bad-2 of the map
-// grew by ~9 points in 60 frames of a synthetic pan, versus none with points).
-// L_- and C_- are sampled backwards: each predicted pixel centre is back-projected at its
-// point's depth into frame k, where L^k and C^k are interpolated bilinearly (forward splatting
-// intensities would leave cracks and round positions).
-// Geometry is the rectified left camera (pinhole fx, fy, cx, cy; depth z = fx * baseline / d).
+// centre: p_D moves each point rigidly by T_{k+1,k} and re-projects it; each pixel takes the
+// best point projecting within 0.75 px of its centre (the nearer surface, then the nearer
+// projection); remaining single-pixel cracks between points of one surface are closed by
+// averaging. (Nearest-pixel splatting alone let the slightly irregular lattice of exact points
+// collide here and gap there: measured, the isolated holes of a 640x480 map grew from 20 to
+// ~2000 specks within 30 frames of head motion, each one an SGBM box.) Points keep their exact
+// positions from frame to frame, so a depth edge moves with the camera by fractions of a pixel per
+// frame; re-deriving the points from pixel centres each frame (our first version) rounds every edge
+// back onto the grid each frame, and under slow motion the predicted edges stayed put while the
+// real ones moved (measured: bad-2 of the map grew by ~9 points in 60 frames of a synthetic pan,
+// versus none with points). L_- and C_- are sampled backwards: each predicted pixel centre is
+// back-projected at its point's depth into frame k, where L^k and C^k are interpolated bilinearly
+// (forward splatting intensities would leave cracks and round positions). Geometry is the rectified
+// left camera (pinhole fx, fy, cx, cy; depth z = fx * baseline / d).
 
 #include <Eigen/Geometry>
+#include <cstdint>
 #include <opencv2/core.hpp>
 
 #include "perception/stereo/rectification.h"
 
 namespace epmap::ep {
 
+// Per-point flags, carried along with the points (bits of a CV_8U image).
+enum PointFlags : uint8_t {
+  kMeasured = 1,  // the point is a stereo measurement (else a fill for an SGBM failure)
+  kDynamic = 2,   // the point belonged to something found moving on its own
+};
+
 // The map at frame k, as the generator needs it.
 struct MapState {
   cv::Mat points;       // CV_32FC3 3-D point per pixel, camera frame k (m); NaN = none
-  cv::Mat measured;     // CV_8U, 255 where the point is a stereo measurement (else a fill)
+  cv::Mat flags;        // CV_8U PointFlags of each point
   cv::Mat image;        // CV_8U grey L^k
   cv::Mat accumulated;  // CV_32F C^k (grey levels)
 };
 
 struct PredictionParams {
+  // A moved point is offered to every pixel whose centre lies within this distance (in x and
+  // in y) of its projection; each pixel keeps the best offer. 0.5 = nearest pixel only.
+  double splat_radius_px = 0.75;
+  // Points of smooth surfaces are put back on their pixel centre's ray each frame (see
+  // ResnapSmoothPoints in ep_generator.cc); depth edges keep exact points.
+  bool resnap_smooth_points = true;
   // A single-pixel crack between two predicted neighbours is closed when their disparities
   // differ by at most this much (one surface); else it stays a hole (a disocclusion).
   double crack_max_step_px = 1.0;
+  // Holes of at most this many pixels that do not touch the image border are filled from
+  // their row neighbours (see FillSmallHoles in ep_generator.cc); 0 disables. Each such hole
+  // would otherwise cost an SGBM box whose padding dwarfs it, and SGBM in a small box lacks the
+  // context of the full frame (measured on the head scenario: bad-2 of 2x2 targets 14% with 8
+  // px of context, 8% on the full frame).
+  int max_hole_fill_px = 25;
   // Points nearer than this to the new camera are dropped (behind it or degenerate).
   double min_depth_m = 0.05;
 };
@@ -47,11 +69,12 @@ struct Prediction {
   cv::Mat disparity;  // D_-: CV_32F, NaN where unknown (holes, and where the point is a fill)
   cv::Mat geometry;   // CV_32F disparity of every predicted point (measured or fill), NaN at holes
   cv::Mat points;     // CV_32FC3 the moved points, camera frame k+1; NaN at holes
-  cv::Mat measured;   // CV_8U, 255 where disparity is a propagated measurement
+  cv::Mat flags;      // CV_8U PointFlags of the predicted points (0 at holes)
   cv::Mat image;      // L_-: CV_32F grey levels, 0 at holes
   cv::Mat accumulated;          // C_-: CV_32F, 0 at holes
   cv::Mat holes;                // CV_8U, 255 where nothing of frame k projects (or is non-finite)
   cv::Mat source_x;             // CV_32F column in frame k each pixel was sampled at, -1 at holes
+  cv::Mat source_y;             // CV_32F row in frame k each pixel was sampled at, -1 at holes
   int non_finite_rejected = 0;  // values that came out non-finite and were made holes
 };
 
