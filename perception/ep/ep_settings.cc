@@ -14,9 +14,9 @@ using Field = std::variant<double*, int*, bool*>;
 
 std::vector<std::pair<std::string, Field>> Fields(EpParams* p) {
   return {
+      {"prediction.image_step", &p->prediction.image_step},
       {"prediction.splat_radius_px", &p->prediction.splat_radius_px},
       {"prediction.crack_max_step_px", &p->prediction.crack_max_step_px},
-      {"prediction.resnap_smooth_points", &p->prediction.resnap_smooth_points},
       {"prediction.min_depth_m", &p->prediction.min_depth_m},
       {"prediction.max_hole_fill_px", &p->prediction.max_hole_fill_px},
       {"comparator.lambda", &p->comparator.lambda},
@@ -48,9 +48,11 @@ std::vector<std::pair<std::string, Field>> Fields(EpParams* p) {
       {"roi.merge_slack", &p->roi.merge_slack},
       {"refresh.every_n_frames", &p->refresh.every_n_frames},
       {"refresh.max_recompute_share", &p->refresh.max_recompute_share},
+      {"refresh.rolling_period_frames", &p->refresh.rolling_period_frames},
       {"max_rotation_step_rad", &p->max_rotation_step_rad},
       {"max_translation_step_m", &p->max_translation_step_m},
       {"recompute_margin_px", &p->recompute_margin_px},
+      {"border_batch_px", &p->border_batch_px},
       {"uncovered_margin_px", &p->uncovered_margin_px},
       {"history_reset_px", &p->history_reset_px},
       {"remeasure_dynamic", &p->remeasure_dynamic},

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 #include <string>
@@ -42,6 +43,70 @@ void CheckPose(const Eigen::Isometry3d& T) {
   }
 }
 
+// Disparities at or below this give no point (too far to move meaningfully).
+constexpr float kMinPointDisparity = 0.25F;
+
+// Runs of `mask` pixels starting at an image edge line and going inwards: along rows from
+// column `start` (step +1 or -1), or along columns from row `start`. Marks the runs in `runs`
+// and returns the strip's thickness: the 75th percentile of the run lengths over all lines (a
+// strip along this edge makes most lines' runs equally long; a strip along a perpendicular edge
+// makes a few lines' runs very long, and must not count).
+int EdgeRuns(const cv::Mat& mask, bool along_rows, int start, int step, cv::Mat* runs) {
+  const int W = mask.cols, H = mask.rows;
+  const int lines = along_rows ? H : W;
+  std::vector<int> lengths(static_cast<size_t>(lines), 0);
+  for (int i = 0; i < lines; ++i) {
+    int n = 0;
+    for (int j = start;; j += step, ++n) {
+      const int u = along_rows ? j : i, v = along_rows ? i : j;
+      if (u < 0 || v < 0 || u >= W || v >= H || !mask.at<uint8_t>(v, u)) break;
+      runs->at<uint8_t>(v, u) = 255;
+    }
+    lengths[static_cast<size_t>(i)] = n;
+  }
+  auto q = lengths.begin() + static_cast<std::ptrdiff_t>(3 * lengths.size() / 4);
+  std::nth_element(lengths.begin(), q, lengths.end());
+  return *q;
+}
+
+// Every step-th pixel of every step-th row: the comparison grid of an image.
+cv::Mat Decimate(const cv::Mat& image, int step) {
+  if (step == 1) return image;
+  const cv::Size grid((image.cols + step - 1) / step, (image.rows + step - 1) / step);
+  cv::Mat out(grid, image.type());
+  const size_t elem = image.elemSize();
+  for (int i = 0; i < grid.height; ++i) {
+    const uint8_t* src = image.ptr<uint8_t>(i * step);
+    uint8_t* dst = out.ptr<uint8_t>(i);
+    for (int j = 0; j < grid.width; ++j) {
+      std::copy_n(src + static_cast<size_t>(j * step) * elem, elem, dst + j * elem);
+    }
+  }
+  return out;
+}
+
+// A mask of the comparison grid back at full resolution (each grid pixel covers step x step).
+cv::Mat Upsample(const cv::Mat& grid_mask, const cv::Size& size, int step) {
+  if (step == 1) return grid_mask;
+  cv::Mat out(size, CV_8U);
+  for (int v = 0; v < size.height; ++v) {
+    const uint8_t* src = grid_mask.ptr<uint8_t>(v / step);
+    uint8_t* dst = out.ptr<uint8_t>(v);
+    for (int u = 0; u < size.width; ++u) dst[u] = src[u / step];
+  }
+  return out;
+}
+
+// The comparator's parameters for the comparison grid: its sizes are given in full-resolution
+// pixels.
+ComparatorParams ForGrid(ComparatorParams p, int step) {
+  const auto scale = [&](int r) { return r > 0 ? std::max(1, (r + step / 2) / step) : 0; };
+  p.open_radius_px = scale(p.open_radius_px);
+  p.close_radius_px = scale(p.close_radius_px);
+  p.min_region_area_px = p.min_region_area_px / (step * step);
+  return p;
+}
+
 // Sets the columns outside [first, last] of `image` to `value`.
 void BlindMargins(int first, int last, cv::Mat* image, double value) {
   const int w = image->cols;
@@ -71,6 +136,7 @@ const char* ToString(FrameMode mode) {
 }
 
 void EpParams::Validate() const {
+  prediction.Validate();
   comparator.Validate();
   stereo_check.Validate();
   sgbm.Validate();
@@ -83,16 +149,15 @@ void EpParams::Validate() const {
     throw std::invalid_argument("EP: the pose jump bounds must be > 0");
   }
   if (recompute_margin_px < 0) throw std::invalid_argument("EP: recompute_margin_px must be >= 0");
-  if (!(prediction.crack_max_step_px >= 0) || !(prediction.min_depth_m > 0) ||
-      !(prediction.splat_radius_px >= 0.5 && prediction.splat_radius_px < 1.0)) {
-    throw std::invalid_argument(
-        "EP: crack_max_step_px >= 0, min_depth_m > 0 and splat_radius_px in [0.5, 1) expected");
-  }
+  if (border_batch_px < 0) throw std::invalid_argument("EP: border_batch_px must be >= 0");
 }
 
 ExpectedPerception::ExpectedPerception(const stereo::RectifiedGeometry& camera,
                                        const EpParams& params)
-    : camera_(camera), params_(params), stereo_(params.sgbm, params.roi) {
+    : camera_(camera),
+      params_(params),
+      stereo_(params.sgbm, params.roi),
+      grid_comparator_(ForGrid(params.comparator, params.prediction.image_step)) {
   if (camera.width <= 0 || camera.height <= 0 || !(camera.fx > 0) || !(camera.fy > 0) ||
       !(camera.baseline_m > 0) || !std::isfinite(camera.cx) || !std::isfinite(camera.cy)) {
     throw std::invalid_argument("EP: the camera needs a positive size, focal lengths and baseline");
@@ -139,8 +204,11 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
   // 1-2. Predict and compare, unless there is nothing to predict from or the motion is not
   // trusted.
   FrameMode mode = FrameMode::kFirst;
+  const int step = params_.prediction.image_step;
   Prediction pred;
   Comparison cmp;
+  cv::Mat flagged;   // the comparator's unexpected regions, at full resolution
+  cv::Mat deferred;  // thin border strips left for a later frame
   if (has_state_) {
     const Eigen::Isometry3d T_cur_prev = T_base_cam0.inverse() * last_T_base_cam0_;
     const double angle = Eigen::AngleAxisd(T_cur_prev.linear()).angle();
@@ -153,7 +221,9 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
       pred = Predict(state_, T_cur_prev, camera_, params_.prediction);
       res->timings.predict_ms = MsSince(t0);
       t0 = Clock::now();
-      cmp = Compare(pred.image, pred.holes == 0, pred.accumulated, left, params_.comparator);
+      cmp = Compare(pred.image, pred.image_valid, pred.accumulated, Decimate(left, step),
+                    grid_comparator_);
+      flagged = Upsample(cmp.flagged, size, step);
       if (params_.stereo_check.enabled) {
         res->stereo_inconsistent =
             CheckStereo(left, right, pred.disparity, params_.stereo_check).inconsistent;
@@ -169,9 +239,9 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
   if (res->compared) {
     if (params_.recompute_margin_px > 0) {
       const int k = 2 * params_.recompute_margin_px + 1;
-      cv::dilate(cmp.flagged, recompute, cv::getStructuringElement(cv::MORPH_RECT, {k, k}));
+      cv::dilate(flagged, recompute, cv::getStructuringElement(cv::MORPH_RECT, {k, k}));
     } else {
-      recompute = cmp.flagged.clone();
+      recompute = flagged.clone();
     }
     recompute |= pred.holes;
     if (!res->stereo_inconsistent.empty()) recompute |= res->stereo_inconsistent;
@@ -186,18 +256,37 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
       }
       recompute.setTo(255, dynamic);
     }
-    // Pixels left unmeasured only because they lay in one of SGBM's blind margins are measured
-    // once they come out of it ...
-    for (int v = 0; v < size.height; ++v) {
-      const uint8_t* flags = pred.flags.ptr<uint8_t>(v);
-      const float* src_x = pred.source_x.ptr<float>(v);
-      uint8_t* rec = recompute.ptr<uint8_t>(v);
-      for (int u = first_column; u <= last_column; ++u) {
-        if (!(flags[u] & kMeasured) && src_x[u] >= 0 &&
-            (src_x[u] < static_cast<float>(first_column) ||
-             src_x[u] > static_cast<float>(last_column))) {
-          rec[u] = 255;
+    // New content along the borders is recomputed once the strip it forms is thick enough to
+    // be worth its SGBM box (the box's padding would dwarf a strip of a pixel or two); until
+    // then it stays unknown (without points: a hole again next frame, and the strip grows).
+    if (params_.border_batch_px > 1) {
+      const struct {
+        bool rows;
+        int start, step;
+      } sides[] = {{true, first_column, 1},
+                   {true, last_column, -1},
+                   {false, 0, 1},
+                   {false, size.height - 1, -1}};
+      for (const auto& side : sides) {
+        cv::Mat runs(size, CV_8U, cv::Scalar(0));
+        if (EdgeRuns(pred.holes, side.rows, side.start, side.step, &runs) <
+            params_.border_batch_px) {
+          BlindMargins(first_column, last_column, &runs, 0);  // filled there, never deferred
+          recompute.setTo(0, runs);
+          deferred = deferred.empty() ? runs : (deferred | runs);
         }
+      }
+    }
+    // Rolling refresh: one band of rows per frame, so that every pixel is measured afresh at
+    // least every rolling_period_frames frames whatever the comparator saw (a wrong disparity
+    // on a surface without texture shows neither in E nor in the stereo check).
+    if (params_.refresh.rolling_period_frames > 0) {
+      const int period = params_.refresh.rolling_period_frames;
+      const int rows = (size.height + period - 1) / period;
+      const int band = static_cast<int>(frame_index_ % static_cast<uint64_t>(period));
+      const int y0 = band * rows;
+      if (y0 < size.height) {
+        recompute(cv::Rect(0, y0, size.width, std::min(rows, size.height - y0))).setTo(255);
       }
     }
     // ... and pixels still inside them are never worth a box: SGBM cannot match them.
@@ -238,22 +327,24 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
   res->timings.stereo_ms = MsSince(t0);
 
   // The motion detector's output: flagged pixels, without those whose fresh disparity shows
-  // the background a moving thing uncovered.
+  // the background a moving thing uncovered (on the comparison grid, then at full resolution).
   t0 = Clock::now();
   if (res->compared) {
-    res->unexpected = cmp.flagged.clone();
+    cv::Mat unexpected = cmp.flagged.clone();
     if (params_.uncovered_margin_px > 0) {
       const float margin = static_cast<float>(params_.uncovered_margin_px);
-      for (int v = 0; v < size.height; ++v) {
-        uint8_t* u8 = res->unexpected.ptr<uint8_t>(v);
-        const float* fresh = res->disparity.ptr<float>(v);
-        const float* predicted = pred.geometry.ptr<float>(v);
-        for (int u = 0; u < size.width; ++u) {
-          if (u8[u] && fresh[u] < predicted[u] - margin) u8[u] = 0;  // false for NaN
+      for (int i = 0; i < unexpected.rows; ++i) {
+        uint8_t* u8 = unexpected.ptr<uint8_t>(i);
+        const float* fresh = res->disparity.ptr<float>(i * step);
+        const float* predicted = pred.geometry.ptr<float>(i * step);
+        for (int j = 0; j < unexpected.cols; ++j) {
+          // False for NaN.
+          if (u8[j] && fresh[j * step] < predicted[j * step] - margin) u8[j] = 0;
         }
       }
-      res->unexpected = RemoveSpecks(res->unexpected, 0, params_.comparator.min_region_area_px);
+      unexpected = RemoveSpecks(unexpected, 0, grid_comparator_.min_region_area_px);
     }
+    res->unexpected = Upsample(unexpected, size, step);
     res->predicted_left = pred.image;
     res->error = cmp.error;
     res->attenuated = cmp.attenuated;
@@ -267,7 +358,8 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
     res->non_finite_rejected = pred.non_finite_rejected;
   } else {
     res->unexpected = cv::Mat::zeros(size, CV_8U);
-    res->accumulated = cv::Mat::zeros(size, CV_32F);  // no history survives a full restart
+    // No history survives a full restart.
+    res->accumulated = cv::Mat::zeros(ComparisonGrid(camera_, step), CV_32F);
   }
   res->unexpected_share = cv::countNonZero(res->unexpected) / n_pixels;
   res->regions = LabelRegions(res->unexpected, res->disparity, camera_, T_base_cam0);
@@ -277,26 +369,48 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
   // frame allocates its own.
   t0 = Clock::now();
   // Points: kept exactly where the prediction stands (no rounding to pixel centres), fresh from
-  // the disparity where SGBM ran, and from the background-preferring fill where nothing is known.
-  const cv::Mat filled_points = PointsFromDisparity(FillUnknownDisparity(res->disparity), camera_);
+  // the disparity where SGBM ran, and from the fill of SGBM's gaps where nothing is known, except
+  // on a deferred border strip: it stays without points, a hole again next frame, until it is
+  // thick enough to be worth its SGBM box.
+  const cv::Mat filled = FillUnknownDisparity(res->disparity);
   if (mode == FrameMode::kPredicted) {
     state_.points = pred.points;  // owned by this frame's prediction, not by the result
-    const cv::Mat fresh_points = PointsFromDisparity(res->disparity, camera_);
-    fresh_points.copyTo(state_.points, res->recompute);
-    for (int v = 0; v < size.height; ++v) {
-      auto* p = state_.points.ptr<cv::Vec3f>(v);
-      const auto* f = filled_points.ptr<cv::Vec3f>(v);
-      for (int u = 0; u < size.width; ++u) {
-        if (!(p[u][2] > 0)) p[u] = f[u];  // no point (NaN): the fill's
+    const float fb = static_cast<float>(camera_.fx * camera_.baseline_m);
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    cv::parallel_for_(cv::Range(0, size.height), [&](const cv::Range& rows) {
+      for (int v = rows.start; v < rows.end; ++v) {
+        auto* p = state_.points.ptr<cv::Vec3f>(v);
+        const float* fresh = res->disparity.ptr<float>(v);
+        const float* fill = filled.ptr<float>(v);
+        const uint8_t* rec = res->recompute.ptr<uint8_t>(v);
+        const uint8_t* later = deferred.empty() ? nullptr : deferred.ptr<uint8_t>(v);
+        const float ray_y = static_cast<float>((v - camera_.cy) / camera_.fy);
+        for (int u = 0; u < size.width; ++u) {
+          float d;
+          if (rec[u]) {
+            d = fresh[u] > kMinPointDisparity ? fresh[u] : fill[u];
+          } else if (!(p[u][2] > 0) && !(later && later[u])) {
+            d = fill[u];
+          } else {
+            continue;
+          }
+          if (d > kMinPointDisparity) {  // false for NaN
+            const float z = fb / d;
+            p[u] = cv::Vec3f(static_cast<float>((u - camera_.cx) / camera_.fx) * z, ray_y * z, z);
+          } else {
+            p[u] = cv::Vec3f(nan, nan, nan);
+          }
+        }
       }
-    }
+    });
   } else {
-    state_.points = filled_points;
+    state_.points = PointsFromDisparity(filled, camera_, kMinPointDisparity);
   }
   state_.flags = cv::Mat(size, CV_8U, cv::Scalar(0));
   state_.flags.setTo(kMeasured, res->disparity > 0);  // false for NaN
   cv::Mat dynamic_flag = state_.flags | kDynamic;
   dynamic_flag.copyTo(state_.flags, res->unexpected);
+
   state_.image = left.clone();
   state_.accumulated = res->accumulated;
   if (mode == FrameMode::kPredicted && params_.history_reset_px > 0) {
@@ -314,7 +428,7 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
     }
     if (cv::countNonZero(changed) > 0) {
       state_.accumulated = res->accumulated.clone();  // the result's C stays as published
-      state_.accumulated.setTo(0, changed);
+      state_.accumulated.setTo(0, Decimate(changed, step));
     }
   }
   res->timings.fuse_ms = MsSince(t0);

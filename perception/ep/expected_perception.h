@@ -40,6 +40,10 @@ namespace epmap::ep {
 struct RefreshPolicy {
   int every_n_frames = 0;            // a full SGBM every N frames
   double max_recompute_share = 0.5;  // or when more than this share would be recomputed anyway
+  // A band of ceil(height / N) rows is recomputed at every frame, cycling down the image, so
+  // that every pixel is measured afresh at least every N frames: the cost is spread evenly
+  // over the frames instead of a full frame now and then. 0 disables.
+  int rolling_period_frames = 20;
 };
 
 struct EpParams {
@@ -55,6 +59,10 @@ struct EpParams {
   double max_translation_step_m = 0.05;
   // Unexpected regions are grown by this margin before recomputing (their edges change too).
   int recompute_margin_px = 3;
+  // Newly visible content along an image border is recomputed once the strip is this thick
+  // (until then it stays unknown): an SGBM box for a 2-pixel strip costs the strip plus the
+  // whole search range and the block's context, 50 times the strip. <= 1 recomputes at once.
+  int border_batch_px = 8;
   // A flagged pixel whose fresh disparity is clearly behind the prediction (by more than this)
   // shows background that a moving thing uncovered: it needs its new disparity, but the thing
   // that moved is no longer there, so it is left out of the unexpected (motion) mask.
@@ -99,11 +107,13 @@ struct EpResult {
   FrameMode mode = FrameMode::kFirst;
   Eigen::Isometry3d T_base_cam0 = Eigen::Isometry3d::Identity();
 
-  cv::Mat disparity;            // the EP map D^{k+1}: CV_32F px, NaN = unknown
-  cv::Mat predicted_left;       // L_-: CV_32F grey levels, 0 at holes (empty on full-only frames)
-  cv::Mat error;                // E: CV_32F (empty when nothing was compared)
-  cv::Mat accumulated;          // C: CV_32F (zeros when nothing was compared)
-  cv::Mat attenuated;           // A: CV_32F (empty when nothing was compared)
+  cv::Mat disparity;  // the EP map D^{k+1}: CV_32F px, NaN = unknown
+  // On the comparison grid (every prediction.image_step-th pixel in x and y):
+  cv::Mat predicted_left;  // L_-: CV_32F grey levels, 0 at holes (empty on full-only frames)
+  cv::Mat error;           // E: CV_32F (empty when nothing was compared)
+  cv::Mat accumulated;     // C: CV_32F (zeros when nothing was compared)
+  cv::Mat attenuated;      // A: CV_32F (empty when nothing was compared)
+  // At full resolution:
   cv::Mat unexpected;           // CV_8U 255: moved on its own (the motion detector output)
   cv::Mat recompute;            // CV_8U 255: where SGBM gave fresh values (all 255 on full frames)
   cv::Mat holes;                // CV_8U 255: nothing predicted (empty when nothing was compared)
@@ -160,6 +170,7 @@ class ExpectedPerception {
   stereo::RectifiedGeometry camera_;
   EpParams params_;
   RoiStereo stereo_;
+  ComparatorParams grid_comparator_;  // params_.comparator in comparison-grid pixels
   EpCounters counters_;
   bool refresh_requested_ = false;
   uint64_t frames_since_full_ = 0;

@@ -29,10 +29,10 @@ namespace epmap::ep {
 struct ComparatorParams {
   double lambda = 10.0;          // forgetting factor of the accumulated error (Sec. IV-A)
   double alpha = 0.1;            // attenuation strength (Sec. IV-A)
-  double threshold_grey = 15.0;  // A above this is unexpected (not in the paper)
+  double threshold_grey = 12.0;  // A above this is unexpected (not in the paper)
   bool compensate_exposure = true;
   int open_radius_px = 1;       // opening of the thresholded A (0 = none)
-  int close_radius_px = 5;      // then closing: joins the fragments of one textured thing
+  int close_radius_px = 8;      // then closing: joins the fragments of one textured thing
   int min_region_area_px = 40;  // connected components smaller than this are dropped
   // Whether pixels found unexpected feed their error into C (the paper: yes; true restores it).
   // Excluding them keeps a moving object from attenuating itself within a few frames while it

@@ -23,8 +23,9 @@ void CheckCamera(const stereo::RectifiedGeometry& camera) {
 }
 
 void CheckInputs(const MapState& s, const stereo::RectifiedGeometry& camera,
-                 const Eigen::Isometry3d& T) {
+                 const Eigen::Isometry3d& T, const PredictionParams& params) {
   CheckCamera(camera);
+  params.Validate();
   const cv::Size size(camera.width, camera.height);
   if (s.points.type() != CV_32FC3 || s.points.size() != size) {
     throw std::invalid_argument("EP generator: points must be CV_32FC3 of the camera's size");
@@ -35,8 +36,10 @@ void CheckInputs(const MapState& s, const stereo::RectifiedGeometry& camera,
   if (s.image.type() != CV_8UC1 || s.image.size() != size) {
     throw std::invalid_argument("EP generator: image must be CV_8UC1 of the camera's size");
   }
-  if (s.accumulated.type() != CV_32FC1 || s.accumulated.size() != size) {
-    throw std::invalid_argument("EP generator: accumulated must be CV_32FC1 of the camera's size");
+  if (s.accumulated.type() != CV_32FC1 ||
+      s.accumulated.size() != ComparisonGrid(camera, params.image_step)) {
+    throw std::invalid_argument(
+        "EP generator: accumulated must be CV_32FC1 of the comparison grid's size");
   }
   if (!T.matrix().allFinite()) throw std::invalid_argument("EP generator: motion is not finite");
 }
@@ -65,8 +68,7 @@ struct Splat {
   }
 };
 
-// See Predict: empty pixels take a neighbour's point when its projection is near enough.
-void ExtendFootprints(const PredictionParams& params, const cv::Mat& offset, Splat* s) {
+void ExtendFootprints(const PredictionParams& params, Splat* s) {
   struct Copy {
     int u, v, from_u, from_v;
   };
@@ -85,13 +87,14 @@ void ExtendFootprints(const PredictionParams& params, const cv::Mat& offset, Spl
           const int vn = v + dv;
           if (vn < 0 || vn >= H) continue;
           const float* d_row = s->disparity.ptr<float>(vn);
-          const float* o_row = offset.ptr<float>(vn);
+          const float* p_row = s->points.ptr<float>(vn);
           for (int du = -1; du <= 1; ++du) {
             const int un = u + du;
             if (un < 0 || un >= W || !(d_row[un] > 0)) continue;
             // The neighbour's projection relative to this pixel's centre.
-            const float ou = o_row[2 * un] + static_cast<float>(du);
-            const float ov = o_row[2 * un + 1] + static_cast<float>(dv);
+            const float* p = p_row + 3 * un;
+            const float ou = s->fx * p[0] / p[2] + s->cx - static_cast<float>(u);
+            const float ov = s->fy * p[1] / p[2] + s->cy - static_cast<float>(v);
             if (std::abs(ou) > radius || std::abs(ov) > radius) continue;
             const float d = d_row[un], dist2 = ou * ou + ov * ov;
             const bool better =
@@ -116,13 +119,6 @@ void ExtendFootprints(const PredictionParams& params, const cv::Mat& offset, Spl
   }
 }
 
-// Cracks: an empty pixel whose 8 neighbours hold at least three points of one surface
-// (disparities within crack_max_step_px) gets their average point, measured if most of them
-// are ("any unmeasured neighbour" would let the unknowns of the map spread into the
-// measurements a little more at every frame), dynamic if any of them is (the conservative
-// side: dynamic points are re-measured). An empty pixel between two surfaces stays a hole: it
-// may be a disocclusion, SGBM must look at it. Fills are decided on the splat alone, then
-// written.
 void FillCracks(const PredictionParams& params, Splat* s) {
   struct Fill {
     int u, v;
@@ -171,44 +167,41 @@ void FillCracks(const PredictionParams& params, Splat* s) {
   }
 }
 
-// Small holes inside the image (components of at most max_hole_fill_px pixels not touching the
-// border: wider cracks, slivers uncovered behind an edge) are filled along their row from the
-// nearest points on either side: linearly between two ends of one surface (within 2 px of
-// disparity), else with the farther end (what an edge uncovers is background). The fill counts
-// as measured only when it interpolates one measured surface. Large holes and the newly visible
-// border stay holes: only SGBM can tell what is there.
+// Small holes (at most max_hole_fill_px wide and tall, found as what an opening by a square of
+// that size removes from the hole mask, away from the image border: wider cracks, slivers
+// uncovered behind an edge) are filled along their row from the points on either side:
+// linearly between two ends of one surface (within 2 px of disparity), else with the farther
+// end (what an edge uncovers is background). The fill counts as measured only when it
+// interpolates one measured surface. Large holes and the newly visible border stay holes: only
+// SGBM can tell what is there.
 void FillSmallHoles(const PredictionParams& params, Splat* s) {
   constexpr float kSameSurfacePx = 2.0F;
-  const int W = s->W, H = s->H;
+  const int W = s->W, H = s->H, n = params.max_hole_fill_px;
   const cv::Mat holes = s->disparity <= 0;
-  cv::Mat labels, stats, centroids;
-  const int n = cv::connectedComponentsWithStats(holes, labels, stats, centroids, 8, CV_32S);
-  std::vector<uint8_t> small(static_cast<size_t>(n), 0);
-  bool any = false;
-  for (int i = 1; i < n; ++i) {
-    const int x = stats.at<int>(i, cv::CC_STAT_LEFT), y = stats.at<int>(i, cv::CC_STAT_TOP);
-    const int w = stats.at<int>(i, cv::CC_STAT_WIDTH), h = stats.at<int>(i, cv::CC_STAT_HEIGHT);
-    const bool border = x == 0 || y == 0 || x + w == W || y + h == H;
-    small[static_cast<size_t>(i)] =
-        !border && stats.at<int>(i, cv::CC_STAT_AREA) <= params.max_hole_fill_px;
-    any |= small[static_cast<size_t>(i)] != 0;
-  }
-  if (!any) return;
-  const auto is_small = [&](int label) { return label != 0 && small[static_cast<size_t>(label)]; };
+  cv::Mat large;
+  cv::morphologyEx(holes, large, cv::MORPH_OPEN,
+                   cv::getStructuringElement(cv::MORPH_RECT, cv::Size(n + 1, n + 1)));
+  cv::Mat small = holes & ~large;
+  // Holes near the border may be the start of a newly visible strip: SGBM's.
+  const int margin = std::min({n + 1, W / 2, H / 2});
+  small(cv::Rect(0, 0, W, margin)).setTo(0);
+  small(cv::Rect(0, H - margin, W, margin)).setTo(0);
+  small(cv::Rect(0, 0, margin, H)).setTo(0);
+  small(cv::Rect(W - margin, 0, margin, H)).setTo(0);
   for (int v = 0; v < H; ++v) {
-    const int* lab = labels.ptr<int>(v);
+    const uint8_t* sm = small.ptr<uint8_t>(v);
     float* disp = s->disparity.ptr<float>(v);
     uint8_t* f = s->flags.ptr<uint8_t>(v);
     int u = 0;
     while (u < W) {
-      if (!is_small(lab[u])) {
+      if (!sm[u]) {
         ++u;
         continue;
       }
       // A run of small-hole pixels on this row, [begin, end), and the points beside it (a run
-      // may also end at another hole).
+      // may also end at a large hole).
       const int begin = u;
-      while (u < W && is_small(lab[u])) ++u;
+      while (u < W && sm[u]) ++u;
       const int end = u;
       const float d_left = begin > 0 ? disp[begin - 1] : 0.0F;
       const float d_right = end < W ? disp[end] : 0.0F;
@@ -233,39 +226,25 @@ void FillSmallHoles(const PredictionParams& params, Splat* s) {
   }
 }
 
-// Points of smooth surfaces (all 8 neighbours within crack_max_step_px of disparity) are moved
-// onto their pixel centre's ray, depth kept. Exact positions only matter at depth edges (where
-// they let an edge move by fractions of a pixel); elsewhere a regular lattice keeps one point
-// per pixel, where drifting sub-pixel offsets would collide here and leave gaps there. The
-// image prediction is unaffected: it samples through each pixel centre's depth.
-void ResnapSmoothPoints(const PredictionParams& params, Splat* s) {
-  const float max_step = static_cast<float>(params.crack_max_step_px);
-  // Only x and y change, and only disparities are read: rows run in parallel, in place.
-  cv::parallel_for_(cv::Range(1, s->H - 1), [&](const cv::Range& rows) {
-    for (int v = rows.start; v < rows.end; ++v) {
-      float* row = s->points.ptr<float>(v);
-      const float* d_up = s->disparity.ptr<float>(v - 1);
-      const float* d_mid = s->disparity.ptr<float>(v);
-      const float* d_down = s->disparity.ptr<float>(v + 1);
-      const float ray_y = (static_cast<float>(v) - s->cy) / s->fy;
-      for (int u = 1; u + 1 < s->W; ++u) {
-        const float d = d_mid[u];
-        if (!(d > 0)) continue;
-        // Empty neighbours (0) make the minimum fail.
-        const float lo = std::min({d_up[u - 1], d_up[u], d_up[u + 1], d_mid[u - 1], d_mid[u + 1],
-                                   d_down[u - 1], d_down[u], d_down[u + 1]});
-        const float hi = std::max({d_up[u - 1], d_up[u], d_up[u + 1], d_mid[u - 1], d_mid[u + 1],
-                                   d_down[u - 1], d_down[u], d_down[u + 1]});
-        if (!(lo >= d - max_step && hi <= d + max_step)) continue;
-        const float z = row[3 * u + 2];
-        row[3 * u] = (static_cast<float>(u) - s->cx) / s->fx * z;
-        row[3 * u + 1] = ray_y * z;
-      }
-    }
-  });
+}  // namespace
+
+void PredictionParams::Validate() const {
+  if (image_step != 1 && image_step != 2) {
+    throw std::invalid_argument("EP generator: image_step must be 1 or 2");
+  }
+  if (!(splat_radius_px >= 0.5 && splat_radius_px < 1.0)) {
+    throw std::invalid_argument("EP generator: splat_radius_px must be in [0.5, 1)");
+  }
+  if (!(crack_max_step_px >= 0) || !(min_depth_m > 0) || max_hole_fill_px < 0) {
+    throw std::invalid_argument(
+        "EP generator: crack_max_step_px >= 0, min_depth_m > 0, max_hole_fill_px >= 0");
+  }
 }
 
-}  // namespace
+cv::Size ComparisonGrid(const stereo::RectifiedGeometry& camera, int image_step) {
+  return {(camera.width + image_step - 1) / image_step,
+          (camera.height + image_step - 1) / image_step};
+}
 
 cv::Mat PointsFromDisparity(const cv::Mat& disparity, const stereo::RectifiedGeometry& camera,
                             double min_disparity_px) {
@@ -294,7 +273,7 @@ cv::Mat PointsFromDisparity(const cv::Mat& disparity, const stereo::RectifiedGeo
 
 Prediction Predict(const MapState& previous, const Eigen::Isometry3d& T_cur_prev,
                    const stereo::RectifiedGeometry& camera, const PredictionParams& params) {
-  CheckInputs(previous, camera, T_cur_prev);
+  CheckInputs(previous, camera, T_cur_prev, params);
   const int W = camera.width, H = camera.height;
   Splat s;
   s.W = W;
@@ -318,110 +297,121 @@ Prediction Predict(const MapState& previous, const Eigen::Isometry3d& T_cur_prev
   // 1. p_D (Sec. IV-B): every point X of frame k becomes X' = R X + t in frame k+1 and lands on
   //    the pixel nearest to its projection. Between two surfaces the nearer point wins
   //    (z-buffer); on one surface, the point nearer to the pixel centre (which keeps one point
-  //    per pixel where the lattice of exact points is slightly irregular). Sequential: points of
-  //    any row may land on any row.
-  s.points = cv::Mat(H, W, CV_32FC3, cv::Scalar(kNaN, kNaN, kNaN));
+  //    per pixel where the lattice of exact points is slightly irregular).
+  //    Two threads share the work: each moves the points of one half of the rows and writes
+  //    those that land in its own half of the target rows; the few that cross the middle are
+  //    written afterwards, in order (the camera moves little between frames).
+  //    A pixel is empty while its disparity is 0; its point is then never read.
+  s.points.create(H, W, CV_32FC3);
   s.flags = cv::Mat(H, W, CV_8U, cv::Scalar(0));
   s.disparity = cv::Mat(H, W, CV_32F, cv::Scalar(0));
-  cv::Mat offset(H, W, CV_32FC2);              // projection minus pixel centre of the point held
   float* dst_points = s.points.ptr<float>(0);  // all freshly allocated: continuous
   uint8_t* dst_flags = s.flags.ptr<uint8_t>(0);
   float* dst_disp = s.disparity.ptr<float>(0);
-  float* dst_offset = offset.ptr<float>(0);
-  for (int v = 0; v < H; ++v) {
-    const float* src = previous.points.ptr<float>(v);
-    const uint8_t* m = previous.flags.ptr<uint8_t>(v);
-    for (int u = 0; u < W; ++u, src += 3) {
-      const float px = src[0], py = src[1], pz = src[2];
-      if (!(pz > 0) || !std::isfinite(px) || !std::isfinite(py) || !std::isfinite(pz)) continue;
-      const float x = r00 * px + r01 * py + r02 * pz + tx;
-      const float y = r10 * px + r11 * py + r12 * pz + ty;
-      const float z = r20 * px + r21 * py + r22 * pz + tz;
-      if (!(z > min_depth)) continue;  // behind the new camera (or NaN)
-      const float inv_z = 1.0F / z;
-      const float u1 = fx * x * inv_z + cx, v1 = fy * y * inv_z + cy;
-      // Outside the image (the comparisons are false for NaN, too).
-      if (!(u1 > -0.5F && v1 > -0.5F && u1 < W - 0.5F && v1 < H - 0.5F)) continue;
-      const int ui = static_cast<int>(u1 + 0.5F), vi = static_cast<int>(v1 + 0.5F);
-      const size_t idx = static_cast<size_t>(vi) * static_cast<size_t>(W) + static_cast<size_t>(ui);
-      const float du = u1 - static_cast<float>(ui), dv = v1 - static_cast<float>(vi);
-      const float d_new = fb * inv_z;
-      const float d_old = dst_disp[idx];  // 0 when empty
-      float* off = dst_offset + 2 * idx;
-      const bool wins = std::abs(d_new - d_old) > max_step
-                            ? d_new > d_old
-                            : du * du + dv * dv < off[0] * off[0] + off[1] * off[1];
-      if (wins) {
-        float* dst = dst_points + 3 * idx;
-        dst[0] = x;
-        dst[1] = y;
-        dst[2] = z;
-        dst_flags[idx] = m[u];
-        dst_disp[idx] = d_new;
-        off[0] = du;
-        off[1] = dv;
+  struct Landing {
+    size_t idx;
+    int ui, vi;
+    float x, y, z, du, dv;
+    uint8_t flags;
+  };
+  // Writes a point if it beats the pixel's current one (see above).
+  const auto land = [&](const Landing& l) {
+    const float d_new = fb / l.z;
+    const float d_old = dst_disp[l.idx];  // 0 when empty
+    float* dst = dst_points + 3 * l.idx;
+    bool wins = d_old == 0.0F;
+    if (!wins) {
+      if (std::abs(d_new - d_old) > max_step) {
+        wins = d_new > d_old;
+      } else {  // one surface: compare with where the current point projects
+        const float du_old = fx * dst[0] / dst[2] + cx - static_cast<float>(l.ui);
+        const float dv_old = fy * dst[1] / dst[2] + cy - static_cast<float>(l.vi);
+        wins = l.du * l.du + l.dv * l.dv < du_old * du_old + dv_old * dv_old;
       }
     }
+    if (!wins) return;
+    dst[0] = l.x;
+    dst[1] = l.y;
+    dst[2] = l.z;
+    dst_flags[l.idx] = l.flags;
+    dst_disp[l.idx] = d_new;
+  };
+  const int halves = H >= 64 ? 2 : 1;
+  std::vector<std::vector<Landing>> crossing(static_cast<size_t>(halves));
+  cv::parallel_for_(cv::Range(0, halves), [&](const cv::Range& range) {
+    for (int half = range.start; half < range.end; ++half) {
+      const int row_begin = half * H / halves, row_end = (half + 1) * H / halves;
+      auto& crossers = crossing[static_cast<size_t>(half)];
+      for (int v = row_begin; v < row_end; ++v) {
+        const float* src = previous.points.ptr<float>(v);
+        const uint8_t* m = previous.flags.ptr<uint8_t>(v);
+        for (int u = 0; u < W; ++u, src += 3) {
+          // Our points are finite or all NaN (the comparison is false for NaN).
+          const float px = src[0], py = src[1], pz = src[2];
+          if (!(pz > 0)) continue;
+          const float x = r00 * px + r01 * py + r02 * pz + tx;
+          const float y = r10 * px + r11 * py + r12 * pz + ty;
+          const float z = r20 * px + r21 * py + r22 * pz + tz;
+          if (!(z > min_depth)) continue;  // behind the new camera (or NaN)
+          const float inv_z = 1.0F / z;
+          const float u1 = fx * x * inv_z + cx, v1 = fy * y * inv_z + cy;
+          // Outside the image (the comparisons are false for NaN and infinities, too).
+          if (!(u1 > -0.5F && v1 > -0.5F && u1 < W - 0.5F && v1 < H - 0.5F)) continue;
+          const int ui = static_cast<int>(u1 + 0.5F), vi = static_cast<int>(v1 + 0.5F);
+          const Landing l{
+              static_cast<size_t>(vi) * static_cast<size_t>(W) + static_cast<size_t>(ui),
+              ui,
+              vi,
+              x,
+              y,
+              z,
+              u1 - static_cast<float>(ui),
+              v1 - static_cast<float>(vi),
+              m[u]};
+          if (vi >= row_begin && vi < row_end) {
+            land(l);
+          } else {
+            crossers.push_back(l);
+          }
+        }
+      }
+    }
+  });
+  for (const auto& crossers : crossing) {
+    for (const Landing& l : crossers) land(l);
   }
   // ... and an empty pixel takes the best point held by a neighbour whose projection lies
-  // within splat_radius_px of its own centre (a footprint of 1.5 px: the lattice of exact points
-  // is slightly irregular, and nearest-pixel splatting alone leaves gaps next to collisions).
-  if (params.splat_radius_px > 0.5) ExtendFootprints(params, offset, &s);
+  // within splat_radius_px of its own centre (a footprint of 1.5 px).
+  if (params.splat_radius_px > 0.5) ExtendFootprints(params, &s);
   FillCracks(params, &s);
   if (params.max_hole_fill_px > 0) FillSmallHoles(params, &s);
-  if (params.resnap_smooth_points) ResnapSmoothPoints(params, &s);
 
-  // 2. p(L^k; T^{k+1}, D_-^{k+1}) and p(C^k; ...) (Sec. IV-A): each pixel centre of frame k+1 is
-  //    back-projected at its point's depth, X' = z ray(u, v), moved back into frame k,
-  //    X = R^T (X' - t), and projected there: q = pi(X). L^k and C^k are sampled at q.
+  // The predicted disparity and the holes, at full resolution.
   Prediction out;
   out.disparity.create(H, W, CV_32F);
   out.geometry.create(H, W, CV_32F);
   out.holes.create(H, W, CV_8U);
-  cv::Mat map_x(H, W, CV_32F), map_y(H, W, CV_32F);
   std::atomic<int> non_finite{0};
   cv::parallel_for_(cv::Range(0, H), [&](const cv::Range& rows) {
     int broken = 0;
     for (int v = rows.start; v < rows.end; ++v) {
       float* pts = s.points.ptr<float>(v);
+      const float* d_splat = s.disparity.ptr<float>(v);
       float* disp = out.disparity.ptr<float>(v);
       float* geo = out.geometry.ptr<float>(v);
       uint8_t* flags = s.flags.ptr<uint8_t>(v);
       uint8_t* hole = out.holes.ptr<uint8_t>(v);
-      float* mx = map_x.ptr<float>(v);
-      float* my = map_y.ptr<float>(v);
-      const float ray_y = (static_cast<float>(v) - cy) / fy;
       for (int u = 0; u < W; ++u) {
         float* p = pts + 3 * u;
-        bool ok = false;
-        const float z = p[2];
-        if (z > min_depth) {
-          // X' - t, then R^T.
-          const float ax = (static_cast<float>(u) - cx) / fx * z - tx;
-          const float ay = ray_y * z - ty;
-          const float az = z - tz;
-          const float x = r00 * ax + r10 * ay + r20 * az;
-          const float y = r01 * ax + r11 * ay + r21 * az;
-          const float zk = r02 * ax + r12 * ay + r22 * az;
-          const float qx = fx * x / zk + cx, qy = fy * y / zk + cy;
-          const float d = fb / z;
-          if (!std::isfinite(qx) || !std::isfinite(qy) || !std::isfinite(d) ||
-              !std::isfinite(p[0]) || !std::isfinite(p[1])) {
-            ++broken;  // a point was there but the arithmetic broke down
-          } else if (zk > min_depth && qx >= 0 && qy >= 0 && qx <= static_cast<float>(W - 1) &&
-                     qy <= static_cast<float>(H - 1)) {
-            mx[u] = qx;
-            my[u] = qy;
-            geo[u] = d;
-            disp[u] = (flags[u] & kMeasured) ? d : kNaN;
-            hole[u] = 0;
-            ok = true;
-          }
-        }
-        if (!ok) {
-          // Nothing of frame k explains this pixel (or its sample would lie outside frame k).
-          mx[u] = -1.0F;
-          my[u] = -1.0F;
+        const float d = d_splat[u];
+        const bool ok = d > 0 && std::isfinite(d) && std::isfinite(p[0]) && std::isfinite(p[1]) &&
+                        std::isfinite(p[2]);
+        if (ok) {
+          geo[u] = d;
+          disp[u] = (flags[u] & kMeasured) ? d : kNaN;
+          hole[u] = 0;
+        } else {
+          if (d > 0) ++broken;  // a point was there but the arithmetic broke down
           geo[u] = kNaN;
           disp[u] = kNaN;
           hole[u] = 255;
@@ -436,15 +426,60 @@ Prediction Predict(const MapState& previous, const Eigen::Isometry3d& T_cur_prev
   out.points = s.points;
   out.flags = s.flags;
 
+  // 2. p(L^k; T^{k+1}, D_-^{k+1}) and p(C^k; ...) (Sec. IV-A) on the comparison grid: each of
+  //    its pixel centres (u, v) = step * (i, j) is back-projected at its point's depth,
+  //    X' = z ray(u, v), moved back into frame k, X = R^T (X' - t), and projected there:
+  //    q = pi(X). L^k is sampled at q (full resolution), C^k at q / step.
+  const int step = params.image_step;
+  const cv::Size grid = ComparisonGrid(camera, step);
+  cv::Mat map_x(grid, CV_32F), map_y(grid, CV_32F), grid_x(grid, CV_32F), grid_y(grid, CV_32F);
+  out.image_valid.create(grid, CV_8U);
+  const float inv_step = 1.0F / static_cast<float>(step);
+  cv::parallel_for_(cv::Range(0, grid.height), [&](const cv::Range& rows) {
+    for (int i = rows.start; i < rows.end; ++i) {
+      const int v = i * step;
+      const float* pts = s.points.ptr<float>(v);
+      float* mx = map_x.ptr<float>(i);
+      float* my = map_y.ptr<float>(i);
+      float* gx = grid_x.ptr<float>(i);
+      float* gy = grid_y.ptr<float>(i);
+      uint8_t* valid = out.image_valid.ptr<uint8_t>(i);
+      const float ray_y = (static_cast<float>(v) - cy) / fy;
+      for (int j = 0; j < grid.width; ++j) {
+        const int u = j * step;
+        const float z = pts[3 * u + 2];
+        valid[j] = 0;
+        mx[j] = my[j] = gx[j] = gy[j] = -1.0F;
+        if (!(z > min_depth)) continue;  // a hole (NaN) or degenerate
+        // X' - t, then R^T.
+        const float ax = (static_cast<float>(u) - cx) / fx * z - tx;
+        const float ay = ray_y * z - ty;
+        const float az = z - tz;
+        const float x = r00 * ax + r10 * ay + r20 * az;
+        const float y = r01 * ax + r11 * ay + r21 * az;
+        const float zk = r02 * ax + r12 * ay + r22 * az;
+        const float qx = fx * x / zk + cx, qy = fy * y / zk + cy;
+        // Inside frame k (false for NaN): else nothing to sample.
+        if (!(zk > min_depth && qx >= 0 && qy >= 0 && qx <= static_cast<float>(W - 1) &&
+              qy <= static_cast<float>(H - 1))) {
+          continue;
+        }
+        mx[j] = qx;
+        my[j] = qy;
+        gx[j] = qx * inv_step;
+        gy[j] = qy * inv_step;
+        valid[j] = 255;
+      }
+    }
+  });
   cv::Mat image_k;
   previous.image.convertTo(image_k, CV_32F);  // interpolate in float: no rounding of L_-
   cv::remap(image_k, out.image, map_x, map_y, cv::INTER_LINEAR, cv::BORDER_CONSTANT, 0);
-  cv::remap(previous.accumulated, out.accumulated, map_x, map_y, cv::INTER_LINEAR,
-            cv::BORDER_CONSTANT, 0);
+  cv::remap(previous.accumulated, out.accumulated, grid_x, grid_y, cv::INTER_LINEAR,
+            cv::BORDER_REPLICATE);
+  out.accumulated.setTo(0, out.image_valid == 0);
   // A non-finite C^k value would spread through the bilinear sample: never let it through.
   cv::patchNaNs(out.accumulated, 0.0);
-  out.source_x = map_x;
-  out.source_y = map_y;
   return out;
 }
 

@@ -23,7 +23,7 @@
 namespace epmap::ep {
 
 struct RoiStereoParams {
-  int context_px = 8;  // beyond half a block, on every side
+  int context_px = 4;  // beyond half a block, on every side
   int band_rows = 24;  // height of the bands the mask is cut into before merging
   // Boxes are merged when area(union) <= merge_slack * (area(a) + area(b)).
   double merge_slack = 1.0;
