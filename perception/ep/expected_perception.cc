@@ -277,6 +277,18 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
         }
       }
     }
+    // Content that comes out of SGBM's blind margins has no measurement, only a fill: it is
+    // measured once there is as much of it as a strip of border_batch_px columns down half the
+    // image (the box's padding would dwarf a thinner strip); until then it stays unknown.
+    {
+      cv::Mat emerged;
+      cv::bitwise_and(pred.flags, cv::Scalar(kUnseen), emerged);
+      BlindMargins(first_column, last_column, &emerged, 0);
+      const int count = cv::countNonZero(emerged);
+      if (count > 0 && count >= std::max(params_.border_batch_px, 1) * size.height / 2) {
+        recompute.setTo(255, emerged);
+      }
+    }
     // Rolling refresh: one band of rows per frame, so that every pixel is measured afresh at
     // least every rolling_period_frames frames whatever the comparator saw (a wrong disparity
     // on a surface without texture shows neither in E nor in the stereo check).
@@ -410,6 +422,23 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
   state_.flags.setTo(kMeasured, res->disparity > 0);  // false for NaN
   cv::Mat dynamic_flag = state_.flags | kDynamic;
   dynamic_flag.copyTo(state_.flags, res->unexpected);
+  // What SGBM has never seen: unknown pixels in its blind margins, unseen points carried along
+  // and not recomputed, deferred border strips.
+  {
+    cv::Mat unseen(size, CV_8U, cv::Scalar(0));
+    BlindMargins(first_column, last_column, &unseen, 255);
+    if (mode == FrameMode::kPredicted) {
+      cv::Mat carried;
+      cv::bitwise_and(pred.flags, cv::Scalar(kUnseen), carried);
+      carried.setTo(0, res->recompute);
+      unseen.setTo(255, carried);
+    }
+    if (!deferred.empty()) unseen |= deferred;
+    // Only where nothing was measured: NaN (OpenCV's == is false for NaN, so is its !=).
+    unseen &= ~(res->disparity == res->disparity);
+    cv::Mat marked = state_.flags | kUnseen;
+    marked.copyTo(state_.flags, unseen);
+  }
 
   state_.image = left.clone();
   state_.accumulated = res->accumulated;

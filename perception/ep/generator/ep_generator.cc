@@ -150,7 +150,7 @@ void FillCracks(const PredictionParams& params, Splat* s) {
             sz += p_row[3 * (u + du) + 2];
             ++n;
             n_measured += (f_row[u + du] & kMeasured) ? 1 : 0;
-            dynamic |= f_row[u + du] & kDynamic;
+            dynamic |= f_row[u + du] & (kDynamic | kUnseen);
           }
         }
         if (n >= 3 && d_max - d_min <= max_step) {
@@ -214,12 +214,12 @@ void FillSmallHoles(const PredictionParams& params, Splat* s) {
           const float t = static_cast<float>(i - begin + 1) / static_cast<float>(end - begin + 1);
           s->SetOnRay(i, v, d_left * (1 - t) + d_right * t,
                       static_cast<uint8_t>((f_left & f_right & kMeasured) |
-                                           ((f_left | f_right) & kDynamic)));
+                                           ((f_left | f_right) & (kDynamic | kUnseen))));
         } else {
           const bool take_left = d_left > 0 && (!(d_right > 0) || d_left < d_right);
           // A guess at what was uncovered: not a measurement.
           s->SetOnRay(i, v, take_left ? d_left : d_right,
-                      static_cast<uint8_t>((f_left | f_right) & kDynamic));
+                      static_cast<uint8_t>((f_left | f_right) & (kDynamic | kUnseen)));
         }
       }
     }
@@ -346,9 +346,9 @@ Prediction Predict(const MapState& previous, const Eigen::Isometry3d& T_cur_prev
         const float* src = previous.points.ptr<float>(v);
         const uint8_t* m = previous.flags.ptr<uint8_t>(v);
         for (int u = 0; u < W; ++u, src += 3) {
-          // Our points are finite or all NaN (the comparison is false for NaN).
+          // No point here (NaN), or a broken one (an infinite x or y is caught below).
           const float px = src[0], py = src[1], pz = src[2];
-          if (!(pz > 0)) continue;
+          if (!(pz > 0) || !std::isfinite(pz)) continue;
           const float x = r00 * px + r01 * py + r02 * pz + tx;
           const float y = r10 * px + r11 * py + r12 * pz + ty;
           const float z = r20 * px + r21 * py + r22 * pz + tz;

@@ -37,6 +37,7 @@ namespace epmap::ep {
 enum PointFlags : uint8_t {
   kMeasured = 1,  // the point is a stereo measurement (else a fill for an SGBM failure)
   kDynamic = 2,   // the point belonged to something found moving on its own
+  kUnseen = 4,    // a fill for content SGBM has never seen (it lay in SGBM's blind margins)
 };
 
 // The map at frame k, as the generator needs it.
