@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <random>
 #include <sstream>
 
 #include "perception/calibration/calibration_error.h"
@@ -111,6 +112,34 @@ std::vector<EyeHandSample> SelectPaths(const std::vector<EyeHandSample>& samples
     if (listed == keep) out.push_back(s);
   }
   return out;
+}
+
+PathSplit SplitByPaths(const std::vector<EyeHandSample>& samples, double test_share,
+                       uint64_t seed) {
+  std::vector<std::string> paths = PathNames(samples);
+  if (paths.size() < 2) {
+    throw CalibrationError(
+        ErrorCode::kInvalidInput,
+        "a split by paths needs at least 2 paths, got " + std::to_string(paths.size()));
+  }
+  if (!(test_share > 0.0 && test_share < 1.0)) {
+    throw CalibrationError(ErrorCode::kInvalidInput, "the test share must be in (0, 1)");
+  }
+  std::sort(paths.begin(), paths.end());
+  std::mt19937_64 rng(seed);
+  for (size_t i = paths.size() - 1; i > 0; --i) {  // Fisher-Yates, library-independent draws
+    const auto j = static_cast<size_t>(static_cast<double>(rng() >> 11) * 0x1.0p-53 *
+                                       static_cast<double>(i + 1));
+    std::swap(paths[i], paths[j]);
+  }
+  const auto p = static_cast<long>(paths.size());
+  const long n_test = std::clamp(std::lround(test_share * static_cast<double>(p)), 1L, p - 1);
+  PathSplit split;
+  split.test_paths.assign(paths.begin(), paths.begin() + n_test);
+  std::sort(split.test_paths.begin(), split.test_paths.end());
+  split.train = SelectPaths(samples, split.test_paths, false);
+  split.test = SelectPaths(samples, split.test_paths, true);
+  return split;
 }
 
 Eigen::Matrix3Xd PointsA(const std::vector<EyeHandSample>& samples) {

@@ -33,6 +33,16 @@ std::vector<std::string> PathNames(const std::vector<EyeHandSample>& samples);
 std::vector<EyeHandSample> SelectPaths(const std::vector<EyeHandSample>& samples,
                                        const std::vector<std::string>& paths, bool keep = true);
 
+// A train/test split by whole paths (the paper tests on unseen trajectories): round(share * P)
+// of the P paths, at least 1 and at most P - 1, chosen by a seeded shuffle of the sorted path
+// names (the same split for the same samples and seed). Throws CalibrationError(kInvalidInput)
+// with fewer than 2 paths or a share outside (0, 1).
+struct PathSplit {
+  std::vector<EyeHandSample> train, test;
+  std::vector<std::string> test_paths;
+};
+PathSplit SplitByPaths(const std::vector<EyeHandSample>& samples, double test_share, uint64_t seed);
+
 // The X_A (or X_B) coordinates as a 3xN matrix.
 Eigen::Matrix3Xd PointsA(const std::vector<EyeHandSample>& samples);
 Eigen::Matrix3Xd PointsB(const std::vector<EyeHandSample>& samples);

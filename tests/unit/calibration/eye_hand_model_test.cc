@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <fstream>
 
 #include "perception/calibration/eye_hand_calibration.h"
@@ -68,6 +69,23 @@ TEST(EyeHandSamples, CsvRoundTripAndErrors) {
   }
   EXPECT_THROW(ReadEyeHandCsv(dir / "missing.csv"), CalibrationError);
   std::filesystem::remove_all(dir);
+}
+
+TEST(EyeHandSamples, SplitByPathsIsDeterministicAndKeepsPathsWhole) {
+  const auto samples = testing::MakeEyeHandSamples({});
+  const PathSplit a = SplitByPaths(samples, 0.25, 3);
+  const PathSplit b = SplitByPaths(samples, 0.25, 3);
+  EXPECT_EQ(a.test_paths, b.test_paths);
+  ASSERT_EQ(a.test_paths.size(), 5u);
+  EXPECT_EQ(a.train.size() + a.test.size(), samples.size());
+  for (const auto& s : a.train) {
+    EXPECT_EQ(std::count(a.test_paths.begin(), a.test_paths.end(), s.path), 0);
+  }
+  EXPECT_NE(SplitByPaths(samples, 0.25, 4).test_paths, a.test_paths);
+  testing::SyntheticEyeHandParams one;
+  one.paths = 1;
+  EXPECT_THROW(SplitByPaths(testing::MakeEyeHandSamples(one), 0.5, 1), CalibrationError);
+  EXPECT_THROW(SplitByPaths(samples, 1.0, 1), CalibrationError);
 }
 
 }  // namespace
