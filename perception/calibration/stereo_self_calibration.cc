@@ -82,13 +82,16 @@ Eigen::Matrix3d Hat(const Eigen::Vector3d& v) {
 
 // Refinement of (R, t) of x_right = R x_left + t, |t| = 1, by minimising a Cauchy-robustified
 // Sampson error in pixels over the RANSAC inliers (NLopt BOBYQA, 5 parameters: a rotation
-// vector perturbing R0 and two tangent coordinates of t around t0).
+// vector perturbing R0 and two tangent coordinates of t around t0). With a baseline-direction
+// prior, the MAP cost adds noise^2 * (angle(t_01, t_01 prior) / sigma)^2 to the sum.
 struct RefineContext {
   const std::vector<Eigen::Vector2d>* left;
   const std::vector<Eigen::Vector2d>* right;
   Eigen::Matrix3d kl_inv, kr_inv_t, r0;
   Eigen::Vector3d t0, u1, u2;
   double scale2;
+  Eigen::Vector3d prior_t01 = Eigen::Vector3d::UnitX();  // unit, cam0 frame
+  double prior_weight = 0.0;                             // noise_px^2 / sigma_rad^2
 
   void Decode(const double* x, Eigen::Matrix3d* r, Eigen::Vector3d* t) const {
     *r = r0 * ExpSo3(Eigen::Vector3d(x[0], x[1], x[2]));
@@ -106,6 +109,11 @@ double RefineObjective(unsigned, const double* x, double*, void* data) {
   for (size_t i = 0; i < c->left->size(); ++i) {
     const double d = SampsonDistance(f, (*c->left)[i], (*c->right)[i]);
     cost += c->scale2 * std::log1p(d * d / c->scale2);
+  }
+  if (c->prior_weight > 0) {
+    const Eigen::Vector3d t01 = -(r.transpose() * t);  // cam1's centre in cam0
+    const double angle = std::atan2(t01.cross(c->prior_t01).norm(), t01.dot(c->prior_t01));
+    cost += c->prior_weight * angle * angle;
   }
   return cost / static_cast<double>(c->left->size());
 }
@@ -318,6 +326,11 @@ StereoSelfCalibrationResult SelfCalibrateStereo(const CameraIntrinsics& cam0,
     ctx.u1 = t.unitOrthogonal();
     ctx.u2 = t.cross(ctx.u1);
     ctx.scale2 = params.ransac.threshold_px * params.ransac.threshold_px;
+    if (params.baseline_direction_prior_sigma_deg > 0) {
+      const double sigma = params.baseline_direction_prior_sigma_deg / kRadToDeg;
+      ctx.prior_t01 = prior.translation().normalized();
+      ctx.prior_weight = params.feature_noise_px * params.feature_noise_px / (sigma * sigma);
+    }
     nlopt::opt opt(nlopt::LN_BOBYQA, 5);
     opt.set_min_objective(RefineObjective, &ctx);
     opt.set_xtol_abs(1e-10);

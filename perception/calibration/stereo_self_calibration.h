@@ -49,9 +49,16 @@ struct StereoSelfCalibrationParams {
   double prior_gate_px = 0.0;  // Sampson distance to F_K; 0 = derived (see header)
   RansacParams ransac;         // normalised 8-point RANSAC (Sampson, px)
   bool refine = true;          // minimise the Sampson error over R, t after RANSAC
-  int min_keypoints = 40;      // per image, over all views
-  int min_matches = 30;        // prior-consistent matches
-  int min_inliers = 20;        // RANSAC inliers
+  // Optional (not in the paper): a Gaussian prior on the baseline direction (cam1's centre seen
+  // from cam0) in the refinement, sigma in degrees; 0 = off, the data alone decide. With little
+  // parallax (a far scene) the direction is weakly determined by the images while the eyes'
+  // centres are well known from the head's geometry; the prior then keeps t near the kinematic
+  // value and lets strong parallax override it. feature_noise_px weighs it against the data.
+  double baseline_direction_prior_sigma_deg = 0.0;
+  double feature_noise_px = 0.5;
+  int min_keypoints = 40;  // per image, over all views
+  int min_matches = 30;    // prior-consistent matches
+  int min_inliers = 20;    // RANSAC inliers
   // Planar / no-parallax scenes: F is undetermined when a homography explains the matches.
   double homography_threshold_px = 2.0;
   double planar_inlier_ratio = 0.85;  // H inliers / F inliers at or above this = refused
