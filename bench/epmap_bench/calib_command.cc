@@ -315,7 +315,8 @@ std::string Stats(const std::vector<double>& v) {
          ",\"n\":" + std::to_string(v.size()) + "}";
 }
 
-int RunVergence(const std::string& dir, int max_frames, int group) {
+int RunVergence(const std::string& dir, int max_frames, int group, double direction_prior_deg,
+                bool verbose) {
   const auto d = epmap::dataset::Load(dir);
   if (!d.urdf) throw std::runtime_error(dir + ": no mav0/kinematics.urdf for the kinematic prior");
   if (d.joints.empty()) throw std::runtime_error(dir + ": no joints0 readings for the prior");
@@ -325,7 +326,12 @@ int RunVergence(const std::string& dir, int max_frames, int group) {
   std::map<int64_t, Eigen::Isometry3d> truth;
   for (const auto& g : gt) truth[g.stamp_ns] = g.T_cam0_cam1;
   const CameraIntrinsics c0 = Intrinsics(d.cam0), c1 = Intrinsics(d.cam1);
-  const StereoSelfCalibrationParams params;
+  const StereoSelfCalibrationParams params;  // the paper's procedure: data only
+  StereoSelfCalibrationParams with_prior;    // plus the optional baseline-direction prior
+  with_prior.baseline_direction_prior_sigma_deg = direction_prior_deg;
+  std::vector<double> wp_rot, wp_dir;
+  std::map<std::string, int> wp_failures;
+  std::vector<double> group_spread;
 
   const int n = static_cast<int>(d.frames.size());
   const int step = std::max(1, n / std::max(1, max_frames));
@@ -362,8 +368,26 @@ int RunVergence(const std::string& dir, int max_frames, int group) {
       vo_rec.push_back(VerticalOffset(c0, c1, r.model.T_cam0_cam1, v.left, v.right));
       vo_prior.push_back(VerticalOffset(c0, c1, v.T_cam0_cam1_prior, v.left, v.right));
       vo_true.push_back(VerticalOffset(c0, c1, t, v.left, v.right));
+      if (verbose) {
+        std::fprintf(stderr,
+                     "frame %d: keypoints %d/%d putative %d gated %d inliers %d homography %d "
+                     "rms %.3f px, rotation error %.3f deg, direction error %.3f deg\n",
+                     i, r.keypoints_left, r.keypoints_right, r.putative_matches,
+                     r.prior_consistent_matches, r.model.inliers, r.homography_inliers,
+                     r.model.rms_sampson_px, rot.back(), dir_err.back());
+      }
     } catch (const CalibrationError& e) {
       ++failures[ToString(e.code())];
+      if (verbose) std::fprintf(stderr, "frame %d: %s\n", i, e.what());
+    }
+    if (direction_prior_deg > 0) {
+      try {
+        const auto r = SelfCalibrateStereo(c0, c1, {v}, with_prior);
+        wp_rot.push_back(RotationAngleDeg(r.model.T_cam0_cam1.linear(), t.linear()));
+        wp_dir.push_back(DirectionAngleDeg(r.model.T_cam0_cam1.translation(), t.translation()));
+      } catch (const CalibrationError& e) {
+        ++wp_failures[ToString(e.code())];
+      }
     }
     // Multi-frame: this frame and the next group-1 ones, when they share one eye configuration.
     if (group > 1 && i + group <= n) {
@@ -374,6 +398,10 @@ int RunVergence(const std::string& dir, int max_frames, int group) {
         w.left = cv::imread(g.left.string(), cv::IMREAD_UNCHANGED);
         w.right = cv::imread(g.right.string(), cv::IMREAD_UNCHANGED);
         w.T_cam0_cam1_prior = prior_at(g.stamp_ns);
+        group_spread.push_back(
+            std::max(RotationAngleDeg(v.T_cam0_cam1_prior.linear(), w.T_cam0_cam1_prior.linear()),
+                     DirectionAngleDeg(v.T_cam0_cam1_prior.translation(),
+                                       w.T_cam0_cam1_prior.translation())));
         views.push_back(w);
       }
       ++multi_tried;
@@ -383,6 +411,7 @@ int RunVergence(const std::string& dir, int max_frames, int group) {
         multi_dir.push_back(DirectionAngleDeg(r.model.T_cam0_cam1.translation(), t.translation()));
       } catch (const CalibrationError& e) {
         ++multi_failures[ToString(e.code())];
+        if (verbose) std::fprintf(stderr, "frames %d..%d: %s\n", i, i + group - 1, e.what());
       }
     }
   }
@@ -399,12 +428,17 @@ int RunVergence(const std::string& dir, int max_frames, int group) {
       "\"prior_rotation_error_deg\":%s,\"prior_baseline_direction_error_deg\":%s,"
       "\"vertical_offset_px\":{\"recovered\":%s,\"kinematic_prior\":%s,\"ground_truth\":%s},"
       "\"self_calibration_ms_median\":%s,"
+      "\"with_direction_prior\":{\"sigma_deg\":%s,\"failures\":%s,\"rotation_error_deg\":%s,"
+      "\"baseline_direction_error_deg\":%s},"
       "\"multi_frame\":{\"frames_per_call\":%d,\"calls\":%d,\"failures\":%s,"
+      "\"prior_spread_within_group_deg\":%s,"
       "\"rotation_error_deg\":%s,\"baseline_direction_error_deg\":%s}}\n",
       n, tried, rot.size(), failures_json(failures).c_str(), Stats(rot).c_str(),
       Stats(dir_err).c_str(), Stats(prior_rot).c_str(), Stats(prior_dir).c_str(),
       Stats(vo_rec).c_str(), Stats(vo_prior).c_str(), Stats(vo_true).c_str(),
-      Num(Median(ms), 4).c_str(), group, multi_tried, failures_json(multi_failures).c_str(),
+      Num(Median(ms), 4).c_str(), Num(direction_prior_deg).c_str(),
+      failures_json(wp_failures).c_str(), Stats(wp_rot).c_str(), Stats(wp_dir).c_str(), group,
+      multi_tried, failures_json(multi_failures).c_str(), Stats(group_spread).c_str(),
       Stats(multi_rot).c_str(), Stats(multi_dir).c_str());
   return 0;
 }
@@ -414,12 +448,17 @@ int Run(int argc, char** argv) {
   std::string samples, vergence;
   uint64_t seed = 1;
   int test_paths = 5, max_frames = 30, group = 3;
+  double direction_prior_deg = 0.5;
+  bool verbose = false;
   app.add_option("--samples", samples, "eye-hand samples CSV (epmap-sim --scenario eye-hand)");
   app.add_option("--vergence", vergence, "vergence dataset folder (epmap-sim --scenario vergence)");
   app.add_option("--seed", seed, "seed of the train/test path split and the learning curve");
   app.add_option("--test-paths", test_paths, "paths held out for testing (default 5)");
   app.add_option("--frames", max_frames, "vergence frames evaluated, evenly spread (default 30)");
   app.add_option("--group", group, "frames per multi-frame self-calibration (default 3; 1 = skip)");
+  app.add_option("--direction-prior-deg", direction_prior_deg,
+                 "also run with a baseline-direction prior of this sigma (default 0.5; 0 = skip)");
+  app.add_flag("--verbose", verbose, "per-frame diagnostics on stderr");
   CLI11_PARSE(app, argc, argv);
   if (samples.empty() && vergence.empty()) {
     std::cerr << "epmap-bench calib: give --samples FILE.csv and/or --vergence DIR\n";
@@ -427,7 +466,7 @@ int Run(int argc, char** argv) {
   }
   try {
     if (!samples.empty()) RunEyeHand(samples, seed, test_paths);
-    if (!vergence.empty()) RunVergence(vergence, max_frames, group);
+    if (!vergence.empty()) RunVergence(vergence, max_frames, group, direction_prior_deg, verbose);
     return 0;
   } catch (const std::exception& e) {
     std::cerr << "epmap-bench calib: " << e.what() << "\n";
