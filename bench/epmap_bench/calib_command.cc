@@ -344,7 +344,7 @@ int RunVergence(const std::string& dir, int max_frames, int group, double direct
   const auto prior_at = [&](int64_t stamp) {
     const auto j = epmap::dataset::InterpolateJoints(d.joints, stamp);
     if (!j) throw std::runtime_error("no joint reading near frame " + std::to_string(stamp));
-    return Eigen::Isometry3d(chain.Cam0Pose(*j).inverse() * chain.Cam1Pose(*j));
+    return KinematicPrior(chain, *j);
   };
   for (int i = 0; i < n && tried < max_frames; i += step) {
     const auto& f = d.frames[static_cast<size_t>(i)];

@@ -130,6 +130,19 @@ double DirectionAngleDeg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   return std::atan2(s, c) * kRadToDeg;
 }
 
+Eigen::Isometry3d KinematicPrior(const kinematics::UrdfChain& chain,
+                                 const std::vector<double>& joints) {
+  if (!chain.has_cam1()) {
+    throw CalibrationError(ErrorCode::kInvalidInput,
+                           "the URDF has no cam1_optical link: no kinematic stereo prior");
+  }
+  try {
+    return chain.Cam0Pose(joints).inverse() * chain.Cam1Pose(joints);
+  } catch (const std::exception& e) {
+    throw CalibrationError(ErrorCode::kInvalidInput, std::string("kinematic prior: ") + e.what());
+  }
+}
+
 Matrix34d LeftCameraMatrix(const CameraIntrinsics& cam0) {
   Matrix34d p = Matrix34d::Zero();
   p.leftCols<3>() = cam0.k;

@@ -20,6 +20,7 @@
 
 #include "perception/calibration/calibration_error.h"
 #include "perception/calibration/two_view_geometry.h"
+#include "perception/kinematics/urdf_chain.h"
 #include "perception/stereo/rectification.h"
 
 namespace epmap::calibration {
@@ -106,6 +107,12 @@ StereoSelfCalibrationResult SelfCalibrateStereo(const CameraIntrinsics& cam0,
                                                 const std::vector<StereoView>& views,
                                                 const StereoSelfCalibrationParams& params = {},
                                                 const ProgressCallback& progress = {});
+
+// The kinematic prior of the extrinsics for encoder readings `joints` (in the chain's bound
+// order): T_cam0_cam1 = T_root_cam0^-1 T_root_cam1 through the URDF. Throws
+// CalibrationError(kInvalidInput) if the URDF has no cam1_optical or the joints are invalid.
+Eigen::Isometry3d KinematicPrior(const kinematics::UrdfChain& chain,
+                                 const std::vector<double>& joints);
 
 // The camera matrices of the prior: P_L = K_L [I | 0], P_R = K_R [R | t], (R, t) = T_cam1_cam0.
 Matrix34d LeftCameraMatrix(const CameraIntrinsics& cam0);
