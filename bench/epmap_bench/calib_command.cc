@@ -1,4 +1,4 @@
-// epmap-bench calib [--samples FILE.csv] [--vergence DIR]: the calibration algorithms of
+// epmap-bench calib [--samples FILE.csv] [--vergence DIR] [--fixed-rig DIR]: the algorithms of
 // paper 001 on an eye-hand sample set (Eq. 9, Eq. 10) and on a verging stereo sequence
 // (Sec. III-A). Prints one JSON object per case; every figure has its baseline beside it
 // (uncalibrated error, Eigen::umeyama, the kinematic prior).
@@ -13,6 +13,7 @@
 #include <iostream>
 #include <map>
 #include <opencv2/imgcodecs.hpp>
+#include <optional>
 #include <random>
 #include <sstream>
 #include <string>
@@ -315,16 +316,27 @@ std::string Stats(const std::vector<double>& v) {
          ",\"n\":" + std::to_string(v.size()) + "}";
 }
 
+// Kinematic mode (fixed_rig_error_deg < 0): prior from joints0 through kinematics.urdf, truth
+// from gt_extrinsics0. Fixed-rig mode (a calibrated rig such as EuRoC): truth from the two
+// sensor.yaml T_BS, prior = truth with its rotation off by fixed_rig_error_deg.
 int RunVergence(const std::string& dir, int max_frames, int group, double direction_prior_deg,
-                bool verbose) {
+                bool verbose, double fixed_rig_error_deg) {
   const auto d = epmap::dataset::Load(dir);
-  if (!d.urdf) throw std::runtime_error(dir + ": no mav0/kinematics.urdf for the kinematic prior");
-  if (d.joints.empty()) throw std::runtime_error(dir + ": no joints0 readings for the prior");
-  auto chain = epmap::kinematics::UrdfChain::FromFile(*d.urdf);
-  chain.BindJointOrder(d.joint_names);
-  const auto gt = ReadGtExtrinsics(d.root / "mav0" / "gt_extrinsics0" / "data.csv");
+  const bool fixed_rig = fixed_rig_error_deg >= 0;
   std::map<int64_t, Eigen::Isometry3d> truth;
-  for (const auto& g : gt) truth[g.stamp_ns] = g.T_cam0_cam1;
+  std::optional<epmap::kinematics::UrdfChain> chain;
+  const Eigen::Isometry3d rig_truth(d.cam0.T_BS.inverse() * d.cam1.T_BS);
+  if (fixed_rig) {
+    for (const auto& f : d.frames) truth[f.stamp_ns] = rig_truth;
+  } else {
+    if (!d.urdf) throw std::runtime_error(dir + ": no mav0/kinematics.urdf for the prior");
+    if (d.joints.empty()) throw std::runtime_error(dir + ": no joints0 readings for the prior");
+    chain.emplace(epmap::kinematics::UrdfChain::FromFile(*d.urdf));
+    chain->BindJointOrder(d.joint_names);
+    for (const auto& g : ReadGtExtrinsics(d.root / "mav0" / "gt_extrinsics0" / "data.csv")) {
+      truth[g.stamp_ns] = g.T_cam0_cam1;
+    }
+  }
   const CameraIntrinsics c0 = Intrinsics(d.cam0), c1 = Intrinsics(d.cam1);
   const StereoSelfCalibrationParams params;  // the paper's procedure: data only
   StereoSelfCalibrationParams with_prior;    // plus the optional baseline-direction prior
@@ -342,9 +354,15 @@ int RunVergence(const std::string& dir, int max_frames, int group, double direct
   int multi_tried = 0;
   std::map<std::string, int> multi_failures;
   const auto prior_at = [&](int64_t stamp) {
+    if (fixed_rig) {
+      Eigen::Isometry3d p = rig_truth;
+      p.rotate(Eigen::AngleAxisd(fixed_rig_error_deg * M_PI / 180,
+                                 Eigen::Vector3d(0.3, 1.0, 0.2).normalized()));
+      return p;
+    }
     const auto j = epmap::dataset::InterpolateJoints(d.joints, stamp);
     if (!j) throw std::runtime_error("no joint reading near frame " + std::to_string(stamp));
-    return KinematicPrior(chain, *j);
+    return KinematicPrior(*chain, *j);
   };
   for (int i = 0; i < n && tried < max_frames; i += step) {
     const auto& f = d.frames[static_cast<size_t>(i)];
@@ -422,7 +440,7 @@ int RunVergence(const std::string& dir, int max_frames, int group, double direct
     return s + "}";
   };
   std::printf(
-      "{\"command\":\"calib\",\"case\":\"vergence\",\"frames\":%d,\"evaluated\":%d,"
+      "{\"command\":\"calib\",\"case\":\"%s\",\"frames\":%d,\"evaluated\":%d,"
       "\"succeeded\":%zu,\"failures\":%s,"
       "\"rotation_error_deg\":%s,\"baseline_direction_error_deg\":%s,"
       "\"prior_rotation_error_deg\":%s,\"prior_baseline_direction_error_deg\":%s,"
@@ -433,10 +451,10 @@ int RunVergence(const std::string& dir, int max_frames, int group, double direct
       "\"multi_frame\":{\"frames_per_call\":%d,\"calls\":%d,\"failures\":%s,"
       "\"prior_spread_within_group_deg\":%s,"
       "\"rotation_error_deg\":%s,\"baseline_direction_error_deg\":%s}}\n",
-      n, tried, rot.size(), failures_json(failures).c_str(), Stats(rot).c_str(),
-      Stats(dir_err).c_str(), Stats(prior_rot).c_str(), Stats(prior_dir).c_str(),
-      Stats(vo_rec).c_str(), Stats(vo_prior).c_str(), Stats(vo_true).c_str(),
-      Num(Median(ms), 4).c_str(), Num(direction_prior_deg).c_str(),
+      fixed_rig ? "fixed-rig" : "vergence", n, tried, rot.size(), failures_json(failures).c_str(),
+      Stats(rot).c_str(), Stats(dir_err).c_str(), Stats(prior_rot).c_str(),
+      Stats(prior_dir).c_str(), Stats(vo_rec).c_str(), Stats(vo_prior).c_str(),
+      Stats(vo_true).c_str(), Num(Median(ms), 4).c_str(), Num(direction_prior_deg).c_str(),
       failures_json(wp_failures).c_str(), Stats(wp_rot).c_str(), Stats(wp_dir).c_str(), group,
       multi_tried, failures_json(multi_failures).c_str(), Stats(group_spread).c_str(),
       Stats(multi_rot).c_str(), Stats(multi_dir).c_str());
@@ -445,13 +463,18 @@ int RunVergence(const std::string& dir, int max_frames, int group, double direct
 
 int Run(int argc, char** argv) {
   CLI::App app("paper 001 calibration: eye-hand fits and stereo self-calibration", argv[0]);
-  std::string samples, vergence;
+  std::string samples, vergence, fixed_rig;
+  double prior_error_deg = 1.0;
   uint64_t seed = 1;
   int test_paths = 5, max_frames = 30, group = 3;
   double direction_prior_deg = 0.5;
   bool verbose = false;
   app.add_option("--samples", samples, "eye-hand samples CSV (epmap-sim --scenario eye-hand)");
   app.add_option("--vergence", vergence, "vergence dataset folder (epmap-sim --scenario vergence)");
+  app.add_option("--fixed-rig", fixed_rig,
+                 "calibrated fixed stereo sequence (e.g. EuRoC): truth = the T_BS of sensor.yaml");
+  app.add_option("--prior-error-deg", prior_error_deg,
+                 "--fixed-rig: rotation error given to the prior (default 1)");
   app.add_option("--seed", seed, "seed of the train/test path split and the learning curve");
   app.add_option("--test-paths", test_paths, "paths held out for testing (default 5)");
   app.add_option("--frames", max_frames, "vergence frames evaluated, evenly spread (default 30)");
@@ -460,13 +483,19 @@ int Run(int argc, char** argv) {
                  "also run with a baseline-direction prior of this sigma (default 0.5; 0 = skip)");
   app.add_flag("--verbose", verbose, "per-frame diagnostics on stderr");
   CLI11_PARSE(app, argc, argv);
-  if (samples.empty() && vergence.empty()) {
-    std::cerr << "epmap-bench calib: give --samples FILE.csv and/or --vergence DIR\n";
+  if (samples.empty() && vergence.empty() && fixed_rig.empty()) {
+    std::cerr << "epmap-bench calib: give --samples FILE.csv, --vergence DIR or --fixed-rig DIR\n";
     return 2;
   }
   try {
     if (!samples.empty()) RunEyeHand(samples, seed, test_paths);
-    if (!vergence.empty()) RunVergence(vergence, max_frames, group, direction_prior_deg, verbose);
+    if (!vergence.empty()) {
+      RunVergence(vergence, max_frames, group, direction_prior_deg, verbose, -1.0);
+    }
+    if (!fixed_rig.empty()) {
+      RunVergence(fixed_rig, max_frames, group, direction_prior_deg, verbose,
+                  std::max(0.0, prior_error_deg));
+    }
     return 0;
   } catch (const std::exception& e) {
     std::cerr << "epmap-bench calib: " << e.what() << "\n";
