@@ -70,7 +70,7 @@ void Record(const Scenario& scenario, const std::filesystem::path& out, bool for
     if (f.odometry) w.AddOdometry(*f.odometry);
     w.AddGtCameraPose(f.stamp_ns, f.gt_T_world_cam0);
     if (f.gt_base) w.AddGtBasePose(*f.gt_base);
-    if (!f.gt_disparity.empty()) w.AddGtDisparity(f.stamp_ns, f.gt_disparity);
+    if (scenario.RecordsDisparity(f)) w.AddGtDisparity(f.stamp_ns, f.gt_disparity);
     if (scenario.has_moving_objects()) w.AddGtUnexpected(f.stamp_ns, f.gt_unexpected);
 
     gt_joints.append(Stamp(f.stamp_ns));
@@ -86,6 +86,15 @@ void Record(const Scenario& scenario, const std::filesystem::path& out, bool for
   w.WriteFile("gt_joints0/data.csv", gt_joints);
   w.WriteFile("gt_extrinsics0/data.csv", gt_extrinsics);
   if (const auto walls = scenario.Walls(); !walls.empty()) w.WriteWalls(walls);
+  if (const auto furniture = scenario.Furniture(); !furniture.empty()) {
+    std::string csv = "x1 [m],y1 [m],x2 [m],y2 [m]\n";
+    for (const auto& s : furniture) {
+      char line[160];
+      std::snprintf(line, sizeof(line), "%.6f,%.6f,%.6f,%.6f\n", s.x1, s.y1, s.x2, s.y2);
+      csv.append(line);
+    }
+    w.WriteFile("gt_map/furniture.csv", csv);
+  }
 }
 
 }  // namespace epmap::sim

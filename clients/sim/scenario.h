@@ -67,6 +67,7 @@ struct SimFrame {
   Eigen::Isometry3d gt_T_world_cam1 = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d gt_T_cam0_cam1 = Eigen::Isometry3d::Identity();  // true stereo extrinsics
   std::optional<dataset::PlanarPose> gt_base;  // true base pose in the world (building)
+  bool at_stop = false;  // building: the base stands still and the camera pans (look-around)
 };
 
 class Scenario {
@@ -101,7 +102,13 @@ class Scenario {
   virtual SimFrame Render(int index) const = 0;
 
   virtual std::vector<EyeHandSample> EyeHandSamples() const { return {}; }
+  // Mobile-robot worlds: footprints (world frame) of the walls' vertical faces, door frames
+  // included, and of the furniture standing on the floor.
   virtual std::vector<dataset::WallSegment> Walls() const { return {}; }
+  virtual std::vector<dataset::WallSegment> Furniture() const { return {}; }
+  // Whether Record writes gt_disparity0 for this frame (building: only at the look-around
+  // stops, to keep the dataset small; SimFrame::gt_disparity is always filled in memory).
+  virtual bool RecordsDisparity(const SimFrame& frame) const { return !frame.gt_disparity.empty(); }
   // A one-line summary for logs.
   virtual std::string Describe() const;
 
