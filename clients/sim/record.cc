@@ -26,15 +26,19 @@ void AppendFields(std::string* line, std::initializer_list<double> values) {
 }
 
 void RecordEyeHand(const Scenario& scenario, dataset::Writer& w) {
-  // X_A as measured (with noise) and, for reference, the noise-free X_A in gt_samples.csv.
+  // X_A as measured (with noise) in samples.csv; the same rows with the noise-free X_A in
+  // gt_samples.csv.
   const std::string header = "#timestamp [ns],xa [m],ya [m],za [m],xb [m],yb [m],zb [m],path\n";
-  std::string samples = header;
+  std::string samples = header, truth = header;
   for (const auto& s : scenario.EyeHandSamples()) {
-    samples.append(Stamp(s.stamp_ns));
-    AppendFields(&samples, {s.xa.x(), s.xa.y(), s.xa.z(), s.xb.x(), s.xb.y(), s.xb.z()});
-    samples.append(",").append(s.path).append("\n");
+    for (auto [csv, xa] : {std::pair(&samples, s.xa), std::pair(&truth, s.xa_noise_free)}) {
+      csv->append(Stamp(s.stamp_ns));
+      AppendFields(csv, {xa.x(), xa.y(), xa.z(), s.xb.x(), s.xb.y(), s.xb.z()});
+      csv->append(",").append(s.path).append("\n");
+    }
   }
   w.WriteFile("samples.csv", samples);
+  w.WriteFile("gt_samples.csv", truth);
   w.WriteUrdf(scenario.urdf());
 }
 

@@ -47,7 +47,8 @@ struct EyeHandSample {
   int64_t stamp_ns = 0;
   Eigen::Vector3d xa = Eigen::Vector3d::Zero();
   Eigen::Vector3d xb = Eigen::Vector3d::Zero();
-  std::string path;  // ellipsoid label, e00..e19
+  std::string path;                                         // ellipsoid label, e00..e19
+  Eigen::Vector3d xa_noise_free = Eigen::Vector3d::Zero();  // ground truth: X_A without noise
 };
 
 struct SimFrame {

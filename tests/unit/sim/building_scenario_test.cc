@@ -31,7 +31,7 @@ Eigen::Isometry3d Planar(const dataset::PlanarPose& p) {
 }
 
 TEST(BuildingScenario, RightImageWarpedByTrueDisparityReproducesLeft) {
-  const auto s = MakeScenario(Building());
+  const Scenario* s = &testing::Shared(Building());
   EXPECT_TRUE(s->rectified());
   const auto cam = s->cam0();
   EXPECT_EQ(cam.width, 320);
@@ -47,7 +47,7 @@ TEST(BuildingScenario, RightImageWarpedByTrueDisparityReproducesLeft) {
 }
 
 TEST(BuildingScenario, UrdfThroughKdlGivesTheRenderedCameraPoses) {
-  const auto s = MakeScenario(Building(false));
+  const Scenario* s = &testing::Shared(Building(false));
   auto chain = kinematics::UrdfChain::FromString(s->urdf());
   EXPECT_EQ(s->joint_names(), std::vector<std::string>{"pan"});
   for (int index : {1, 400, 1200}) {
@@ -67,7 +67,7 @@ TEST(BuildingScenario, RouteStopsToLookAroundAndOdometryDrifts) {
   ScenarioOptions o = Building();
   o.width = 32;  // geometry only: tiny images
   o.height = 24;
-  const auto s = MakeScenario(o);
+  const Scenario* s = &testing::Shared(o);
   EXPECT_GT(s->frame_count(), 1000);
   EXPECT_LT(s->frame_count(), 3000);
   EXPECT_DOUBLE_EQ(s->rate_hz(), 10.0);
@@ -106,9 +106,9 @@ TEST(BuildingScenario, ReverseStartsWhereTheForwardRunEnds) {
   ScenarioOptions o = Building();
   o.width = 32;
   o.height = 24;
-  const auto forward = MakeScenario(o);
+  const Scenario* forward = &testing::Shared(o);
   o.reverse = true;
-  const auto backward = MakeScenario(o);
+  const Scenario* backward = &testing::Shared(o);
   const auto end = *forward->Render(forward->frame_count() - 1).gt_base;
   const auto start = *backward->Render(0).gt_base;
   EXPECT_NEAR(start.x, end.x, 1e-9);
@@ -125,7 +125,7 @@ TEST(BuildingScenario, ReverseStartsWhereTheForwardRunEnds) {
 }
 
 TEST(BuildingScenario, FloorPlanAndDisparityRange) {
-  const auto s = MakeScenario(Building());
+  const Scenario* s = &testing::Shared(Building());
   const auto walls = s->Walls();
   ASSERT_GT(walls.size(), 50u);
   double min_x = 1e9, max_x = -1e9, min_y = 1e9, max_y = -1e9;
@@ -158,7 +158,7 @@ TEST(BuildingScenario, RecordWritesOdometryMapAndDisparityAtStops) {
   o.frames = 20;
   o.width = 160;
   o.height = 120;
-  const auto s = MakeScenario(o);
+  const Scenario* s = &testing::Shared(o);
   Record(*s, dir / "b", false);
   const auto d = dataset::Load(dir / "b");
   EXPECT_EQ(d.frames.size(), 20u);

@@ -22,7 +22,7 @@ ScenarioOptions Small(bool noise = true) {
 }
 
 TEST(VergenceScenario, RightImageWarpedThroughTrueGeometryReproducesLeft) {
-  const auto s = MakeScenario(Small());
+  const Scenario* s = &testing::Shared(Small());
   EXPECT_FALSE(s->rectified());
   for (int index : {0, 95, 260}) {
     const SimFrame f = s->Render(index);
@@ -34,7 +34,7 @@ TEST(VergenceScenario, RightImageWarpedThroughTrueGeometryReproducesLeft) {
 }
 
 TEST(VergenceScenario, EyesVergeAndTiltAndTheExtrinsicsChange) {
-  const auto s = MakeScenario(Small());
+  const Scenario* s = &testing::Shared(Small());
   auto truth = kinematics::UrdfChain::FromString(s->true_urdf());
   truth.BindJointOrder(s->joint_names());
   double min_v = 1e9, max_v = -1e9, min_tilt = 1e9, max_tilt = -1e9;
@@ -65,7 +65,7 @@ TEST(VergenceScenario, EyesVergeAndTiltAndTheExtrinsicsChange) {
 }
 
 TEST(VergenceScenario, WithoutNoiseEncodersAreExact) {
-  const auto s = MakeScenario(Small(false));
+  const Scenario* s = &testing::Shared(Small(false));
   const SimFrame f = s->Render(50);
   EXPECT_EQ(f.joints, f.gt_joints);
   auto chain = kinematics::UrdfChain::FromString(s->urdf());
