@@ -168,7 +168,7 @@ class BuildingScenario final : public Scenario {
     return ToWorld(world_.furniture_faces);
   }
 
-  SimFrame Render(int index) const override {
+  SimFrame RenderFrame(int index, bool ground_truth) const override {
     CheckIndex(index);
     const State& s = states_[static_cast<size_t>(index)];
     SimFrame f;
@@ -195,6 +195,7 @@ class BuildingScenario final : public Scenario {
     shot.sensor.noise_sigma = options().noise ? 2.0 : 0.0;
     shot.seed = options().seed;
     shot.index = index;
+    shot.ground_truth = ground_truth;
     shot.rectified = true;
     shot.baseline = (shot.T_world_cam0.inverse() * shot.T_world_cam1).translation().x();
     ShootStereo(shot, &f);

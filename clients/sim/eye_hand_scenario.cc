@@ -132,8 +132,9 @@ class EyeHandScenario final : public Scenario {
   std::string urdf() const override { return IcubHeadUrdf(); }
   std::string true_urdf() const override { return IcubHeadUrdf(); }
   std::vector<std::string> joint_names() const override { return {}; }
-  SimFrame Render(int index) const override {
+  SimFrame RenderFrame(int index, bool ground_truth) const override {
     CheckIndex(index);  // throws: no images
+    (void)ground_truth;
     return {};
   }
   std::vector<EyeHandSample> EyeHandSamples() const override { return samples_; }

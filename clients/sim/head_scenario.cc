@@ -98,7 +98,7 @@ class HeadScenario final : public Scenario {
     return 16 * static_cast<int>(std::ceil(camera_.fx * kBaselineM / 0.38 / 16));
   }
 
-  SimFrame Render(int index) const override {
+  SimFrame RenderFrame(int index, bool ground_truth) const override {
     CheckIndex(index);
     const double t = index / kRateHz;
     SimFrame f;
@@ -120,6 +120,7 @@ class HeadScenario final : public Scenario {
     shot.sensor.noise_sigma = options().noise ? 2.0 : 0.0;
     shot.seed = options().seed;
     shot.index = index;
+    shot.ground_truth = ground_truth;
     shot.rectified = !vergence_;
     // The true rig is rectified by construction; take its baseline from the chain itself.
     shot.baseline = (shot.T_world_cam0.inverse() * shot.T_world_cam1).translation().x();

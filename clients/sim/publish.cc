@@ -92,7 +92,7 @@ class RenderAhead {
         index = claimed_++;
       }
       try {
-        SimFrame f = scenario_.Render(index);
+        SimFrame f = scenario_.RenderSensors(index);
         std::lock_guard lock(mutex_);
         done_.emplace(index, std::move(f));
       } catch (...) {

@@ -32,8 +32,8 @@ struct PublishOptions {
 };
 
 struct PublishReport {
-  int frames_sent = 0;  // stereo frames (or eye-hand paths) written
-  double seconds = 0;   // from the first frame sent to the last
+  int frames_sent = 0;     // stereo frames (or eye-hand paths) written
+  double seconds = 0;      // from the first frame sent to the last
   int late_frames = 0;     // frames sent more than 5 ms after their scheduled time
   double max_late_ms = 0;  // the latest of them
   bool readers_matched = false;

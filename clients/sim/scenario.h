@@ -100,7 +100,10 @@ class Scenario {
 
   // Renders frame `index` in [0, frame_count()). Thread-safe and deterministic. Throws
   // std::out_of_range for a bad index, std::logic_error for a scenario without images.
-  virtual SimFrame Render(int index) const = 0;
+  SimFrame Render(int index) const { return RenderFrame(index, true); }
+  // The same frame with only what the robot's sensors give (images, encoders, odometry, stamp)
+  // and the true poses: no depth, disparity or motion masks (cheaper, for publishing).
+  SimFrame RenderSensors(int index) const { return RenderFrame(index, false); }
 
   virtual std::vector<EyeHandSample> EyeHandSamples() const { return {}; }
   // Mobile-robot worlds: footprints (world frame) of the walls' vertical faces, door frames
@@ -115,6 +118,7 @@ class Scenario {
 
  protected:
   explicit Scenario(ScenarioOptions options) : options_(std::move(options)) {}
+  virtual SimFrame RenderFrame(int index, bool ground_truth) const = 0;
   void CheckIndex(int index) const;
 
  private:

@@ -162,6 +162,19 @@ TEST(HeadScenario, DisparityRangeCoversTheScene) {
   }
 }
 
+TEST(HeadScenario, SensorsOnlyFrameHasTheSameImagesWithoutGroundTruth) {
+  const Scenario* s = &testing::Shared(Small("head"));
+  const SimFrame full = s->Render(60), sensors = s->RenderSensors(60);
+  EXPECT_EQ(cv::norm(full.left, sensors.left, cv::NORM_INF), 0);
+  EXPECT_EQ(cv::norm(full.right, sensors.right, cv::NORM_INF), 0);
+  EXPECT_EQ(full.joints, sensors.joints);
+  EXPECT_EQ(full.stamp_ns, sensors.stamp_ns);
+  EXPECT_TRUE(sensors.gt_disparity.empty());
+  EXPECT_TRUE(sensors.gt_depth.empty());
+  EXPECT_TRUE(sensors.gt_unexpected.empty());
+  EXPECT_TRUE(full.gt_T_world_cam0.isApprox(sensors.gt_T_world_cam0, 0));
+}
+
 TEST(HeadScenario, RenderIsDeterministicAndIndependentOfOrder) {
   const auto a = MakeScenario(Small("head"));  // two separate instances
   const auto b = MakeScenario(Small("head"));

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <numbers>
+#include <opencv2/features2d.hpp>
 
 #include "clients/sim/scenario.h"
 #include "perception/kinematics/urdf_chain.h"
@@ -62,6 +63,46 @@ TEST(VergenceScenario, EyesVergeAndTiltAndTheExtrinsicsChange) {
   EXPECT_GT(max_tilt - min_tilt, 2 * kDeg);
   // The encoders' vergence is biased by 0.75 degrees.
   EXPECT_NEAR(bias_sum / n, 0.75 * kDeg, 0.02 * kDeg);
+}
+
+TEST(VergenceScenario, EnoughSiftMatchesOverDepthForSelfCalibration) {
+  // Paper 001, Sec. III-A matches SIFT features between the eyes: the room must offer many,
+  // spread over depth, that agree with the true epipolar geometry.
+  const Scenario* s = &testing::Shared(Small());
+  const auto sift = cv::SIFT::create();
+  const auto cam = s->cam0();
+  Eigen::Matrix3d K;
+  K << cam.fu, 0, cam.cu, 0, cam.fv, cam.cv, 0, 0, 1;
+  for (int index : {30, 210}) {
+    const SimFrame f = s->Render(index);
+    std::vector<cv::KeyPoint> k0, k1;
+    cv::Mat d0, d1;
+    sift->detectAndCompute(f.left, cv::noArray(), k0, d0);
+    sift->detectAndCompute(f.right, cv::noArray(), k1, d1);
+    std::vector<std::vector<cv::DMatch>> knn;
+    cv::BFMatcher().knnMatch(d0, d1, knn, 2);
+    // F = K^-T [t]x R K^-1 with (R, t) = T_cam1_cam0.
+    const Eigen::Isometry3d T10 = f.gt_T_cam0_cam1.inverse();
+    const Eigen::Vector3d t = T10.translation();
+    Eigen::Matrix3d tx;
+    tx << 0, -t.z(), t.y(), t.z(), 0, -t.x(), -t.y(), t.x(), 0;
+    const Eigen::Matrix3d F = K.inverse().transpose() * tx * T10.linear() * K.inverse();
+    int consistent = 0;
+    float near = 1e9F, far = 0;
+    for (const auto& m : knn) {
+      if (m.size() < 2 || m[0].distance > 0.8F * m[1].distance) continue;
+      const cv::Point2f a = k0[static_cast<size_t>(m[0].queryIdx)].pt;
+      const cv::Point2f b = k1[static_cast<size_t>(m[0].trainIdx)].pt;
+      const Eigen::Vector3d line = F * Eigen::Vector3d(a.x, a.y, 1);
+      if (std::abs(line.dot(Eigen::Vector3d(b.x, b.y, 1))) / line.head<2>().norm() > 1.0) continue;
+      ++consistent;
+      const float z = f.gt_depth.at<float>(cvRound(a.y), cvRound(a.x));
+      near = std::min(near, z);
+      far = std::max(far, z);
+    }
+    EXPECT_GE(consistent, 80) << "frame " << index;
+    EXPECT_GT(far - near, 1.0F) << "frame " << index;
+  }
 }
 
 TEST(VergenceScenario, WithoutNoiseEncodersAreExact) {
