@@ -1,5 +1,6 @@
-// The calibration algorithms on the project's synthetic worlds (clients/sim): the vergence
-// scenario's unrectified pairs with biased eye encoders, against the true per-frame extrinsics.
+// The calibration algorithms on the project's synthetic worlds (clients/sim): the eye-hand
+// scenario's workspace-dependent error (paper 001, Sec. IV-A targets), and the vergence
+// scenario's unrectified pairs with biased eye encoders against the true per-frame extrinsics.
 // Renders in-process: labelled slow.
 
 #include <gtest/gtest.h>
@@ -8,6 +9,7 @@
 #include <cmath>
 
 #include "clients/sim/scenario.h"
+#include "perception/calibration/eye_hand_calibration.h"
 #include "perception/calibration/stereo_self_calibration.h"
 #include "perception/kinematics/urdf_chain.h"
 
@@ -32,6 +34,23 @@ double MedianVerticalOffset(const cv::Mat& l, const cv::Mat& r) {
   if (dy.empty()) return 1e9;
   std::nth_element(dy.begin(), dy.begin() + static_cast<std::ptrdiff_t>(dy.size() / 2), dy.end());
   return dy[dy.size() / 2];
+}
+
+TEST(SimCalibration, EyeHandMixtureMeetsThePapersTarget) {
+  const auto scenario = sim::MakeScenario({.name = "eye-hand"});
+  std::vector<EyeHandSample> samples;
+  for (const auto& s : scenario->EyeHandSamples())
+    samples.push_back({s.stamp_ns, s.xa, s.xb, s.path});
+  ASSERT_EQ(samples.size(), 2000u);
+  const PathSplit split = SplitByPaths(samples, 0.25, 1);  // 15 paths to train, 5 to test
+  EyeHandCalibrationParams se3, mixture;
+  mixture.method = EyeHandMethod::kMixture;  // K = 4, the paper's choice
+  const auto a = CalibrateEyeHand(split.train, split.test, se3);
+  const auto b = CalibrateEyeHand(split.train, split.test, mixture);
+  EXPECT_GT(a.errors.initial.mean_m, 0.03);
+  EXPECT_LT(a.errors.test.mean_m, a.errors.initial.mean_m / 2);
+  EXPECT_LT(b.errors.test.mean_m, 0.011);  // paper 001, Sec. IV-A: 1.1 cm
+  EXPECT_LT(b.errors.test.mean_m, 0.75 * a.errors.test.mean_m);
 }
 
 TEST(SimCalibration, VergenceExtrinsicsRecoveredFromBiasedEncoders) {
