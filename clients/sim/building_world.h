@@ -31,7 +31,7 @@ BuildingWorld BuildBuilding(uint64_t seed);
 
 // The route of the forward run (floor frame): the robot starts at the first point facing the
 // second and drives straight between consecutive points, turning in place at each.
-// About 60 m through a room, a door, both corridors and a second room.
+// About 59 m through a room, a door, both corridors and a second room.
 std::vector<Eigen::Vector2d> BuildingRoute();
 
 }  // namespace epmap::sim

@@ -5,8 +5,10 @@
 #include <gtest/gtest.h>
 
 #include <epmap_dds/CameraInfoPubSubTypes.h>
+#include <epmap_dds/EyeHandSamplesPubSubTypes.h>
 #include <epmap_dds/ImagePubSubTypes.h>
 #include <epmap_dds/JointStatePubSubTypes.h>
+#include <epmap_dds/OdometryPubSubTypes.h>
 
 #include <map>
 #include <mutex>
@@ -105,6 +107,67 @@ TEST(EpmapSimPublish, EveryFrameArrivesIntact) {
   EXPECT_NEAR(right_infos[0].baseline_from_p(), 0.068, 1e-9);
   EXPECT_DOUBLE_EQ(right_infos[0].p[0], fx);
   EXPECT_DOUBLE_EQ(right_infos[0].k[0], fx);
+}
+
+TEST(EpmapSimPublish, BuildingSendsGreyImagesAndOdometry) {
+  const uint32_t domain = epmap::testing::UniqueDomainId(12);
+  const dds::TopicNames topics;
+  dds::Participant participant(domain, "sim-publish-building-test");
+  std::mutex mutex;
+  std::vector<cv::Mat> images;
+  std::vector<dds::PlanarOdometry> odometry;
+  dds::Reader<sensor_msgs::msg::Image, sensor_msgs::msg::ImagePubSubType> left_reader(
+      participant, topics.left_image,
+      [&](sensor_msgs::msg::Image&& m) {
+        std::string reason;
+        cv::Mat img = dds::ImageToMat(m, &reason);
+        std::lock_guard lock(mutex);
+        images.push_back(img);
+      },
+      8u << 20, 50);
+  dds::Reader<sensor_msgs::msg::Image, sensor_msgs::msg::ImagePubSubType> right_reader(
+      participant, topics.right_image, [](sensor_msgs::msg::Image&&) {}, 8u << 20, 50);
+  dds::Reader<nav_msgs::msg::Odometry, nav_msgs::msg::OdometryPubSubType> odom_reader(
+      participant, topics.odom,
+      [&](nav_msgs::msg::Odometry&& m) {
+        std::string reason;
+        auto o = dds::FromOdometry(m, &reason);
+        std::lock_guard lock(mutex);
+        if (o) odometry.push_back(*o);
+      },
+      1u << 20, 50);
+  const auto r = testing::RunCommand((epmap::testing::BinDir() / "epmap-sim").string() +
+                                     " publish --scenario building --domain " +
+                                     std::to_string(domain) + " --frames 12 --size 80x60");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::lock_guard lock(mutex);
+  ASSERT_EQ(images.size(), 12u);
+  EXPECT_EQ(images[0].type(), CV_8UC1);
+  ASSERT_EQ(odometry.size(), 12u);
+  // The robot drives off after its first look-around (7 frames).
+  EXPECT_GT(odometry.back().x, 0.1);
+}
+
+TEST(EpmapSimPublish, EyeHandSendsOneMessagePerPath) {
+  const uint32_t domain = epmap::testing::UniqueDomainId(13);
+  const dds::TopicNames topics;
+  dds::Participant participant(domain, "sim-publish-eye-hand-test");
+  std::mutex mutex;
+  std::map<std::string, size_t> per_path;
+  dds::Reader<epmap_msgs::msg::EyeHandSamples, epmap_msgs::msg::EyeHandSamplesPubSubType> reader(
+      participant, topics.eye_hand_samples,
+      [&](epmap_msgs::msg::EyeHandSamples&& m) {
+        std::lock_guard lock(mutex);
+        for (const auto& s : m.samples()) per_path[s.path()]++;
+      },
+      4u << 20, 50);
+  const auto r = testing::RunCommand((epmap::testing::BinDir() / "epmap-sim").string() +
+                                     " publish --scenario eye-hand --rate 20 --domain " +
+                                     std::to_string(domain));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::lock_guard lock(mutex);
+  ASSERT_EQ(per_path.size(), 20u);
+  for (const auto& [path, n] : per_path) EXPECT_EQ(n, 100u) << path;
 }
 
 }  // namespace
