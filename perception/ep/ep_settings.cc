@@ -56,6 +56,10 @@ std::vector<std::pair<std::string, Field>> Fields(EpParams* p) {
       {"uncovered_margin_px", &p->uncovered_margin_px},
       {"history_reset_px", &p->history_reset_px},
       {"remeasure_dynamic", &p->remeasure_dynamic},
+      {"narrow_search", &p->narrow_search},
+      {"roi.range_margin_px", &p->roi.range_margin_px},
+      {"roi.range_margin_share", &p->roi.range_margin_share},
+      {"roi.range_unknown_share", &p->roi.range_unknown_share},
   };
 }
 

@@ -207,8 +207,9 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
   const int step = params_.prediction.image_step;
   Prediction pred;
   Comparison cmp;
-  cv::Mat flagged;   // the comparator's unexpected regions, at full resolution
-  cv::Mat deferred;  // thin border strips left for a later frame
+  cv::Mat flagged;    // the comparator's unexpected regions, at full resolution
+  cv::Mat deferred;   // thin border strips left for a later frame
+  cv::Mat uncertain;  // recomputed regions whose disparity may be anything
   if (has_state_) {
     const Eigen::Isometry3d T_cur_prev = T_base_cam0.inverse() * last_T_base_cam0_;
     const double angle = Eigen::AngleAxisd(T_cur_prev.linear()).angle();
@@ -243,8 +244,14 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
     } else {
       recompute = flagged.clone();
     }
+    // Where the geometry itself is in question (something moved, or the pair disagrees), SGBM
+    // searches the full range; elsewhere the prediction says what disparities to expect.
+    uncertain = recompute.clone();
     recompute |= pred.holes;
-    if (!res->stereo_inconsistent.empty()) recompute |= res->stereo_inconsistent;
+    if (!res->stereo_inconsistent.empty()) {
+      recompute |= res->stereo_inconsistent;
+      uncertain |= res->stereo_inconsistent;
+    }
     if (params_.remeasure_dynamic) {
       // Where something moved on its own last frame, the map's geometry is not to be trusted:
       // re-measured whether or not E notices (the thing may have left a low-texture place).
@@ -255,6 +262,7 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
         cv::dilate(dynamic, dynamic, cv::getStructuringElement(cv::MORPH_RECT, {k, k}));
       }
       recompute.setTo(255, dynamic);
+      uncertain.setTo(255, dynamic);
     }
     // New content along the borders is recomputed once the strip it forms is thick enough to
     // be worth its SGBM box (the box's padding would dwarf a strip of a pixel or two); until
@@ -278,14 +286,15 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
       }
     }
     // Content that comes out of SGBM's blind margins has no measurement, only a fill: it is
-    // measured once there is as much of it as a strip of border_batch_px columns down half the
-    // image (the box's padding would dwarf a thinner strip); until then it stays unknown.
+    // measured once there is as much of it as a strip of border_batch_px columns down the whole
+    // image (its box reaches back over the whole search range: a thinner strip would pay that
+    // padding for little); until then it stays unknown.
     {
       cv::Mat emerged;
       cv::bitwise_and(pred.flags, cv::Scalar(kUnseen), emerged);
       BlindMargins(first_column, last_column, &emerged, 0);
       const int count = cv::countNonZero(emerged);
-      if (count > 0 && count >= std::max(params_.border_batch_px, 1) * size.height / 2) {
+      if (count > 0 && count >= std::max(params_.border_batch_px, 1) * size.height) {
         recompute.setTo(255, emerged);
       }
     }
@@ -320,7 +329,13 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
   t0 = Clock::now();
   if (mode == FrameMode::kPredicted) {
     res->disparity = pred.disparity.clone();
-    const RoiStereoStats stats = stereo_.ComputeMasked(left, right, recompute, res->disparity);
+    cv::Mat expected;
+    if (params_.narrow_search) {
+      expected = pred.geometry.clone();
+      expected.setTo(std::numeric_limits<float>::quiet_NaN(), uncertain);
+    }
+    const RoiStereoStats stats =
+        stereo_.ComputeMasked(left, right, recompute, res->disparity, expected);
     res->recompute = recompute;
     res->recomputed_share = static_cast<double>(stats.target_pixels) / n_pixels;
     res->stereo_area_share = static_cast<double>(stats.computed_pixels) / n_pixels;

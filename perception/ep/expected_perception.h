@@ -68,6 +68,10 @@ struct EpParams {
   // that moved is no longer there, so it is left out of the unexpected (motion) mask.
   // <= 0 disables this. Our addition, not in the paper.
   double uncovered_margin_px = 1.0;
+  // SGBM searches only the disparity range the prediction expects in a region (with a margin,
+  // see RoiStereoParams), except where something moved or the pair disagrees: the search
+  // range is most of SGBM's cost.
+  bool narrow_search = true;
   // Pixels found unexpected are marked dynamic in the map; next frame, wherever the prediction
   // comes from dynamic points, SGBM re-measures (a moving thing's geometry is stale at once, and
   // where it leaves a low-texture surface neither E nor the stereo check would notice). Our

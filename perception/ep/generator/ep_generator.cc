@@ -309,32 +309,31 @@ Prediction Predict(const MapState& previous, const Eigen::Isometry3d& T_cur_prev
   uint8_t* dst_flags = s.flags.ptr<uint8_t>(0);
   float* dst_disp = s.disparity.ptr<float>(0);
   struct Landing {
-    size_t idx;
     int ui, vi;
-    float x, y, z, du, dv;
+    float x, y, z, d, du, dv;
     uint8_t flags;
   };
   // Writes a point if it beats the pixel's current one (see above).
   const auto land = [&](const Landing& l) {
-    const float d_new = fb / l.z;
-    const float d_old = dst_disp[l.idx];  // 0 when empty
-    float* dst = dst_points + 3 * l.idx;
-    bool wins = d_old == 0.0F;
-    if (!wins) {
-      if (std::abs(d_new - d_old) > max_step) {
-        wins = d_new > d_old;
-      } else {  // one surface: compare with where the current point projects
-        const float du_old = fx * dst[0] / dst[2] + cx - static_cast<float>(l.ui);
-        const float dv_old = fy * dst[1] / dst[2] + cy - static_cast<float>(l.vi);
-        wins = l.du * l.du + l.dv * l.dv < du_old * du_old + dv_old * dv_old;
+    const size_t idx =
+        static_cast<size_t>(l.vi) * static_cast<size_t>(W) + static_cast<size_t>(l.ui);
+    const float d_old = dst_disp[idx];  // 0 when empty
+    float* dst = dst_points + 3 * idx;
+    if (d_old != 0.0F) {
+      if (std::abs(l.d - d_old) > max_step) {
+        if (l.d < d_old) return;  // behind the current surface
+      } else {                    // one surface: the point nearer to the pixel centre stays
+        const float inv = 1.0F / dst[2];
+        const float du_old = fx * dst[0] * inv + cx - static_cast<float>(l.ui);
+        const float dv_old = fy * dst[1] * inv + cy - static_cast<float>(l.vi);
+        if (l.du * l.du + l.dv * l.dv >= du_old * du_old + dv_old * dv_old) return;
       }
     }
-    if (!wins) return;
     dst[0] = l.x;
     dst[1] = l.y;
     dst[2] = l.z;
-    dst_flags[l.idx] = l.flags;
-    dst_disp[l.idx] = d_new;
+    dst_flags[idx] = l.flags;
+    dst_disp[idx] = l.d;
   };
   const int halves = H >= 64 ? 2 : 1;
   std::vector<std::vector<Landing>> crossing(static_cast<size_t>(halves));
@@ -358,16 +357,15 @@ Prediction Predict(const MapState& previous, const Eigen::Isometry3d& T_cur_prev
           // Outside the image (the comparisons are false for NaN and infinities, too).
           if (!(u1 > -0.5F && v1 > -0.5F && u1 < W - 0.5F && v1 < H - 0.5F)) continue;
           const int ui = static_cast<int>(u1 + 0.5F), vi = static_cast<int>(v1 + 0.5F);
-          const Landing l{
-              static_cast<size_t>(vi) * static_cast<size_t>(W) + static_cast<size_t>(ui),
-              ui,
-              vi,
-              x,
-              y,
-              z,
-              u1 - static_cast<float>(ui),
-              v1 - static_cast<float>(vi),
-              m[u]};
+          const Landing l{ui,
+                          vi,
+                          x,
+                          y,
+                          z,
+                          fb * inv_z,
+                          u1 - static_cast<float>(ui),
+                          v1 - static_cast<float>(vi),
+                          m[u]};
           if (vi >= row_begin && vi < row_end) {
             land(l);
           } else {

@@ -1,6 +1,7 @@
 #include "perception/ep/update/roi_stereo.h"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
@@ -23,12 +24,15 @@ RoiStereo::RoiStereo(const stereo::SgbmParams& sgbm, const RoiStereoParams& para
                                     sgbm.mode);
 }
 
-cv::Mat RoiStereo::Match(const cv::Mat& left, const cv::Mat& right) {
+cv::Mat RoiStereo::Match(const cv::Mat& left, const cv::Mat& right, int min_disparity,
+                         int num_disparities) {
+  matcher_->setMinDisparity(min_disparity);
+  matcher_->setNumDisparities(num_disparities);
   cv::Mat fixed;
   matcher_->compute(left, right, fixed);  // CV_16S, disparity * 16
   cv::Mat out(fixed.size(), CV_32FC1);
   const float nan = std::numeric_limits<float>::quiet_NaN();
-  const int invalid_below = sgbm_.min_disparity * 16;  // "no match" is (min_disparity - 1) * 16
+  const int invalid_below = min_disparity * 16;  // "no match" is (min_disparity - 1) * 16
   for (int r = 0; r < fixed.rows; ++r) {
     const auto* in = fixed.ptr<int16_t>(r);
     auto* o = out.ptr<float>(r);
@@ -43,7 +47,7 @@ cv::Mat RoiStereo::ComputeFull(const cv::Mat& left, const cv::Mat& right) {
   if (left.size() != right.size() || left.type() != right.type()) {
     throw std::invalid_argument("ROI stereo: left and right differ in size or type");
   }
-  return Match(left, right);
+  return Match(left, right, sgbm_.min_disparity, sgbm_.num_disparities);
 }
 
 std::vector<RoiBox> RoiStereo::PlanBoxes(const cv::Mat& mask) const {
@@ -92,7 +96,8 @@ std::vector<RoiBox> RoiStereo::PlanBoxes(const cv::Mat& mask) const {
 }
 
 RoiStereoStats RoiStereo::ComputeMasked(const cv::Mat& left, const cv::Mat& right,
-                                        const cv::Mat& mask, cv::Mat& disparity) {
+                                        const cv::Mat& mask, cv::Mat& disparity,
+                                        const cv::Mat& expected) {
   if (left.size() != right.size() || left.type() != right.type()) {
     throw std::invalid_argument("ROI stereo: left and right differ in size or type");
   }
@@ -100,16 +105,61 @@ RoiStereoStats RoiStereo::ComputeMasked(const cv::Mat& left, const cv::Mat& righ
       disparity.size() != left.size()) {
     throw std::invalid_argument("ROI stereo: mask (CV_8U) and disparity (CV_32F) must match");
   }
+  if (!expected.empty() && (expected.type() != CV_32FC1 || expected.size() != left.size())) {
+    throw std::invalid_argument(
+        "ROI stereo: expected disparity must be CV_32F of the images' size");
+  }
   RoiStereoStats stats;
   stats.plan = PlanBoxes(mask);
   stats.boxes = static_cast<int>(stats.plan.size());
   stats.target_pixels = cv::countNonZero(mask);
+  const int full_min = sgbm_.min_disparity, full_num = sgbm_.num_disparities;
+  const int half = sgbm_.block_size / 2 + params_.context_px;
   for (const RoiBox& box : stats.plan) {
-    stats.computed_pixels += box.padded.area();
-    const cv::Mat fresh = Match(left(box.padded), right(box.padded));
+    int min_d = full_min, num_d = full_num;
+    if (!expected.empty()) {
+      // The range the box's target pixels need, if (nearly) all of them have an expectation.
+      float lo = std::numeric_limits<float>::max(), hi = std::numeric_limits<float>::lowest();
+      long long with = 0, without = 0;
+      for (int v = box.target.y; v < box.target.y + box.target.height; ++v) {
+        const uint8_t* m = mask.ptr<uint8_t>(v);
+        const float* e = expected.ptr<float>(v);
+        for (int u = box.target.x; u < box.target.x + box.target.width; ++u) {
+          if (!m[u]) continue;
+          if (!std::isfinite(e[u])) {
+            ++without;
+            continue;
+          }
+          ++with;
+          lo = std::min(lo, e[u]);
+          hi = std::max(hi, e[u]);
+        }
+      }
+      const bool known =
+          with > 0 && static_cast<double>(without) <=
+                          params_.range_unknown_share * static_cast<double>(with + without);
+      if (known && hi >= lo) {
+        const double margin = params_.range_margin_px + params_.range_margin_share * hi;
+        const int lo_d = std::max(full_min, static_cast<int>(std::floor(lo - margin)));
+        const int hi_d = static_cast<int>(std::ceil(hi + margin));
+        const int num = (hi_d - lo_d + 1 + 15) / 16 * 16;
+        if (lo_d + num <= full_min + full_num && num < full_num) {
+          min_d = lo_d;
+          num_d = num;
+          ++stats.narrowed_boxes;
+        }
+      }
+    }
+    // The padding to the left needs only this box's search range.
+    cv::Rect padded = box.padded;
+    const int left_edge = std::max(0, box.target.x - half - (min_d + num_d));
+    padded.width -= left_edge - padded.x;
+    padded.x = left_edge;
+    stats.computed_pixels += static_cast<long long>(padded.area()) * num_d / full_num;
+    const cv::Mat fresh = Match(left(padded), right(padded), min_d, num_d);
     // Only the box's own mask pixels, which have the full padding around them.
-    const cv::Rect in_box(box.target.x - box.padded.x, box.target.y - box.padded.y,
-                          box.target.width, box.target.height);
+    const cv::Rect in_box(box.target.x - padded.x, box.target.y - padded.y, box.target.width,
+                          box.target.height);
     fresh(in_box).copyTo(disparity(box.target), mask(box.target));
   }
   return stats;

@@ -27,6 +27,13 @@ struct RoiStereoParams {
   int band_rows = 24;  // height of the bands the mask is cut into before merging
   // Boxes are merged when area(union) <= merge_slack * (area(a) + area(b)).
   double merge_slack = 1.0;
+  // When the caller knows roughly what disparity to expect in a box, SGBM searches only
+  // [min - margin, max + margin] there (margin = range_margin_px + range_margin_share * max),
+  // rounded to SGBM's steps of 16: cost and left padding both scale with the search range.
+  double range_margin_px = 6.0;
+  double range_margin_share = 0.25;
+  // ... as long as at most this share of the box's target pixels has no expectation.
+  double range_unknown_share = 0.1;
 
   void Validate() const;  // std::invalid_argument with the reason
 };
@@ -39,8 +46,11 @@ struct RoiBox {
 
 struct RoiStereoStats {
   int boxes = 0;
-  long long target_pixels = 0;    // pixels of the mask (given fresh values)
-  long long computed_pixels = 0;  // pixels SGBM processed (sum of the padded boxes)
+  int narrowed_boxes = 0;       // boxes searched over a narrowed range
+  long long target_pixels = 0;  // pixels of the mask (given fresh values)
+  // Pixels SGBM processed (the padded boxes), weighted by their share of the full search range:
+  // the cost in full-frame pixels.
+  long long computed_pixels = 0;
   std::vector<RoiBox> plan;
 };
 
@@ -54,8 +64,11 @@ class RoiStereo {
 
   // Recomputes the pixels where `mask` (CV_8U) is non-zero and writes them (NaN where SGBM
   // finds no match) into `disparity` (CV_32F, the images' size); other pixels are untouched.
+  // `expected` (optional, CV_32F, NaN = unknown) narrows each box's search range when (nearly)
+  // all its target pixels have an expectation ("over the disparity range it needs"); other
+  // boxes search the full range.
   RoiStereoStats ComputeMasked(const cv::Mat& left, const cv::Mat& right, const cv::Mat& mask,
-                               cv::Mat& disparity);
+                               cv::Mat& disparity, const cv::Mat& expected = cv::Mat());
 
   // The padded boxes SGBM would run on for `mask` (exposed for tests and the benchmark).
   std::vector<RoiBox> PlanBoxes(const cv::Mat& mask) const;
@@ -72,7 +85,8 @@ class RoiStereo {
   int last_matchable_column(int width) const { return width - 1 - sgbm_.block_size / 2; }
 
  private:
-  cv::Mat Match(const cv::Mat& left, const cv::Mat& right);
+  // SGBM over [min_disparity, min_disparity + num_disparities), NaN where no match.
+  cv::Mat Match(const cv::Mat& left, const cv::Mat& right, int min_disparity, int num_disparities);
   stereo::SgbmParams sgbm_;
   RoiStereoParams params_;
   cv::Ptr<cv::StereoSGBM> matcher_;
