@@ -399,81 +399,76 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
   // the disparity where SGBM ran, and from the fill of SGBM's gaps where nothing is known, except
   // on a deferred border strip: it stays without points, a hole again next frame, until it is
   // thick enough to be worth its SGBM box.
-  const cv::Mat filled = FillUnknownDisparity(res->disparity);
-  if (mode == FrameMode::kPredicted) {
-    state_.points = pred.points;  // owned by this frame's prediction, not by the result
-    const float fb = static_cast<float>(camera_.fx * camera_.baseline_m);
+  // Flags: measured where the map has a disparity, dynamic where something moved on its own,
+  // unseen where nothing was measured and SGBM never looked (its blind margins, unseen points
+  // carried along and not recomputed, deferred strips). One pass over the rows.
+  const bool predicted = mode == FrameMode::kPredicted;
+  state_.points = predicted ? pred.points  // owned by this frame's prediction, not the result
+                            : cv::Mat(size, CV_32FC3);
+  state_.flags.create(size, CV_8U);  // a fresh buffer: the prediction's flags are read below
+  if (predicted && state_.flags.data == pred.flags.data) state_.flags = cv::Mat(size, CV_8U);
+  const float fb = static_cast<float>(camera_.fx * camera_.baseline_m);
+  cv::parallel_for_(cv::Range(0, size.height), [&](const cv::Range& rows) {
+    std::vector<float> fill(static_cast<size_t>(size.width));
     const float nan = std::numeric_limits<float>::quiet_NaN();
-    cv::parallel_for_(cv::Range(0, size.height), [&](const cv::Range& rows) {
-      for (int v = rows.start; v < rows.end; ++v) {
-        auto* p = state_.points.ptr<cv::Vec3f>(v);
-        const float* fresh = res->disparity.ptr<float>(v);
-        const float* fill = filled.ptr<float>(v);
-        const uint8_t* rec = res->recompute.ptr<uint8_t>(v);
-        const uint8_t* later = deferred.empty() ? nullptr : deferred.ptr<uint8_t>(v);
-        const float ray_y = static_cast<float>((v - camera_.cy) / camera_.fy);
-        for (int u = 0; u < size.width; ++u) {
-          float d;
-          if (rec[u]) {
-            d = fresh[u] > kMinPointDisparity ? fresh[u] : fill[u];
-          } else if (!(p[u][2] > 0) && !(later && later[u])) {
-            d = fill[u];
-          } else {
-            continue;
-          }
-          if (d > kMinPointDisparity) {  // false for NaN
-            const float z = fb / d;
-            p[u] = cv::Vec3f(static_cast<float>((u - camera_.cx) / camera_.fx) * z, ray_y * z, z);
-          } else {
-            p[u] = cv::Vec3f(nan, nan, nan);
-          }
+    for (int v = rows.start; v < rows.end; ++v) {
+      auto* p = state_.points.ptr<cv::Vec3f>(v);
+      const float* fresh = res->disparity.ptr<float>(v);
+      FillUnknownDisparityRow(fresh, fill.data(), size.width);
+      const uint8_t* rec = res->recompute.ptr<uint8_t>(v);
+      const uint8_t* moved = res->unexpected.ptr<uint8_t>(v);
+      const uint8_t* carried = predicted ? pred.flags.ptr<uint8_t>(v) : nullptr;
+      const uint8_t* later = deferred.empty() ? nullptr : deferred.ptr<uint8_t>(v);
+      uint8_t* flags = state_.flags.ptr<uint8_t>(v);
+      const float ray_y = static_cast<float>((v - camera_.cy) / camera_.fy);
+      for (int u = 0; u < size.width; ++u) {
+        const bool measured = fresh[u] > 0;  // false for NaN
+        uint8_t f = measured ? kMeasured : 0;
+        if (moved[u]) f |= kDynamic;
+        if (std::isnan(fresh[u]) &&
+            (u < first_column || u > last_column || (later && later[u]) ||
+             (carried && (carried[u] & kUnseen) && !rec[u]))) {
+          f |= kUnseen;
+        }
+        flags[u] = f;
+        float d;
+        if (!predicted || rec[u]) {
+          d = fresh[u] > kMinPointDisparity ? fresh[u] : fill[static_cast<size_t>(u)];
+        } else if (!(p[u][2] > 0) && !(later && later[u])) {
+          d = fill[static_cast<size_t>(u)];
+        } else {
+          continue;  // the predicted point stays
+        }
+        if (d > kMinPointDisparity) {  // false for NaN
+          const float z = fb / d;
+          p[u] = cv::Vec3f(static_cast<float>((u - camera_.cx) / camera_.fx) * z, ray_y * z, z);
+        } else {
+          p[u] = cv::Vec3f(nan, nan, nan);
         }
       }
-    });
-  } else {
-    state_.points = PointsFromDisparity(filled, camera_, kMinPointDisparity);
-  }
-  state_.flags = cv::Mat(size, CV_8U, cv::Scalar(0));
-  state_.flags.setTo(kMeasured, res->disparity > 0);  // false for NaN
-  cv::Mat dynamic_flag = state_.flags | kDynamic;
-  dynamic_flag.copyTo(state_.flags, res->unexpected);
-  // What SGBM has never seen: unknown pixels in its blind margins, unseen points carried along
-  // and not recomputed, deferred border strips.
-  {
-    cv::Mat unseen(size, CV_8U, cv::Scalar(0));
-    BlindMargins(first_column, last_column, &unseen, 255);
-    if (mode == FrameMode::kPredicted) {
-      cv::Mat carried;
-      cv::bitwise_and(pred.flags, cv::Scalar(kUnseen), carried);
-      carried.setTo(0, res->recompute);
-      unseen.setTo(255, carried);
     }
-    if (!deferred.empty()) unseen |= deferred;
-    // Only where nothing was measured: NaN (OpenCV's == is false for NaN, so is its !=).
-    unseen &= ~(res->disparity == res->disparity);
-    cv::Mat marked = state_.flags | kUnseen;
-    marked.copyTo(state_.flags, unseen);
-  }
-
+  });
   state_.image = left.clone();
   state_.accumulated = res->accumulated;
-  if (mode == FrameMode::kPredicted && params_.history_reset_px > 0) {
-    // Errors explained by a wrong map are not history: forget them where the map changed.
+  if (predicted && params_.history_reset_px > 0) {
+    // Errors explained by a wrong map are not history: forget them where the map changed (on
+    // the comparison grid, where C lives).
     const float margin = static_cast<float>(params_.history_reset_px);
-    cv::Mat changed(size, CV_8U, cv::Scalar(0));
-    for (int v = 0; v < size.height; ++v) {
+    cv::Mat reset;
+    for (int i = 0; i < res->accumulated.rows; ++i) {
+      const int v = i * step;
       const uint8_t* rec = res->recompute.ptr<uint8_t>(v);
       const float* fresh = res->disparity.ptr<float>(v);
-      const float* predicted = pred.geometry.ptr<float>(v);
-      uint8_t* c = changed.ptr<uint8_t>(v);
-      for (int u = 0; u < size.width; ++u) {
-        if (rec[u] && std::abs(fresh[u] - predicted[u]) > margin) c[u] = 255;  // false for NaN
+      const float* predicted_d = pred.geometry.ptr<float>(v);
+      for (int j = 0; j < res->accumulated.cols; ++j) {
+        const int u = j * step;
+        if (rec[u] && std::abs(fresh[u] - predicted_d[u]) > margin) {  // false for NaN
+          if (reset.empty()) reset = res->accumulated.clone();  // the result's C stays as published
+          reset.at<float>(i, j) = 0.0F;
+        }
       }
     }
-    if (cv::countNonZero(changed) > 0) {
-      state_.accumulated = res->accumulated.clone();  // the result's C stays as published
-      state_.accumulated.setTo(0, Decimate(changed, step));
-    }
+    if (!reset.empty()) state_.accumulated = reset;
   }
   res->timings.fuse_ms = MsSince(t0);
 

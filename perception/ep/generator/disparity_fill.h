@@ -15,4 +15,7 @@ namespace epmap::ep {
 // any valid disparity stay NaN).
 cv::Mat FillUnknownDisparity(const cv::Mat& disparity);
 
+// The same for one row of `width` values (in and out must not overlap).
+void FillUnknownDisparityRow(const float* in, float* out, int width);
+
 }  // namespace epmap::ep
