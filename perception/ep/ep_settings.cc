@@ -25,7 +25,7 @@ std::vector<std::pair<std::string, Field>> Fields(EpParams* p) {
       {"comparator.compensate_exposure", &p->comparator.compensate_exposure},
       {"comparator.open_radius_px", &p->comparator.open_radius_px},
       {"comparator.min_region_area_px", &p->comparator.min_region_area_px},
-      {"comparator.accumulate_unexpected", &p->comparator.accumulate_unexpected},
+      {"comparator.unexpected_weight", &p->comparator.unexpected_weight},
       {"comparator.close_radius_px", &p->comparator.close_radius_px},
       {"stereo_check.enabled", &p->stereo_check.enabled},
       {"stereo_check.threshold_grey", &p->stereo_check.threshold_grey},

@@ -425,9 +425,8 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
         const bool measured = fresh[u] > 0;  // false for NaN
         uint8_t f = measured ? kMeasured : 0;
         if (moved[u]) f |= kDynamic;
-        if (std::isnan(fresh[u]) &&
-            (u < first_column || u > last_column || (later && later[u]) ||
-             (carried && (carried[u] & kUnseen) && !rec[u]))) {
+        if (std::isnan(fresh[u]) && (u < first_column || u > last_column || (later && later[u]) ||
+                                     (carried && (carried[u] & kUnseen) && !rec[u]))) {
           f |= kUnseen;
         }
         flags[u] = f;

@@ -12,6 +12,9 @@ void ComparatorParams::Validate() const {
   if (!(lambda >= 0)) throw std::invalid_argument("comparator: lambda must be >= 0");
   if (!(alpha >= 0)) throw std::invalid_argument("comparator: alpha must be >= 0");
   if (!(threshold_grey > 0)) throw std::invalid_argument("comparator: threshold must be > 0");
+  if (!(unexpected_weight >= 0 && unexpected_weight <= 1)) {
+    throw std::invalid_argument("comparator: unexpected_weight must be in [0, 1]");
+  }
   if (open_radius_px < 0 || close_radius_px < 0 || min_region_area_px < 0) {
     throw std::invalid_argument("comparator: radii and minimum area must be >= 0");
   }
@@ -134,7 +137,14 @@ Comparison Compare(const cv::Mat& predicted, const cv::Mat& valid,
   out.accumulated.setTo(0, invalid);
   // Every pixel above the threshold (specks included: a speck removed from the output is still
   // an unexpected error, not predictable noise) keeps its history unchanged.
-  if (!params.accumulate_unexpected) predicted_accumulated.copyTo(out.accumulated, above);
+  if (params.unexpected_weight < 1.0) {
+    // C = (w E + lambda C_-) / (w + lambda) where the error is unexpected (w = 1: the paper).
+    cv::Mat weighted;
+    const double w = params.unexpected_weight;
+    cv::addWeighted(out.error, w / (w + params.lambda), predicted_accumulated,
+                    params.lambda / (w + params.lambda), 0.0, weighted);
+    weighted.copyTo(out.accumulated, above);
+  }
   out.valid_pixels = cv::countNonZero(valid);
   if (out.valid_pixels > 0) {
     out.mean_error = cv::mean(out.error, valid)[0];

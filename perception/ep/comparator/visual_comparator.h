@@ -34,12 +34,14 @@ struct ComparatorParams {
   int open_radius_px = 1;       // opening of the thresholded A (0 = none)
   int close_radius_px = 8;      // then closing: joins the fragments of one textured thing
   int min_region_area_px = 40;  // connected components smaller than this are dropped
-  // Whether pixels found unexpected feed their error into C (the paper: yes; true restores it).
-  // Excluding them keeps a moving object from attenuating itself within a few frames while it
-  // overlaps its previous position (measured on the head scenario: with the paper's choice the
-  // toy's mask shrinks to its leading edge); persistent noise is still accumulated where it
-  // stays below the threshold or forms specks.
-  bool accumulate_unexpected = false;
+  // How much the pixels found unexpected (A above the threshold) feed their error into C:
+  //   C = (w E + lambda C_-) / (w + lambda) there (w = 1: the paper; w = 0: C = C_-).
+  // 0 keeps a moving object from attenuating itself within a few frames while it overlaps its
+  // previous position; persistent noise is still accumulated wherever it stays below the
+  // threshold. Measured on the head scenario (300 frames, settled C): w = 0: IoU of the
+  // unexpected mask 0.74 (mean), mean A / mean E 0.66; w = 0.1: 0.68, 0.59; w = 0.3: 0.40,
+  // 0.48; w = 1: 0.22, 0.43. The robot wants the detector: 0.
+  double unexpected_weight = 0.0;
 
   void Validate() const;  // std::invalid_argument with the reason
 };

@@ -30,8 +30,8 @@ TEST(VisualComparator, ImplementsThePapersEquations) {
   const cv::Mat valid(20, 20, CV_8U, cv::Scalar(255));
   ComparatorParams p;
   p.compensate_exposure = false;
-  p.accumulate_unexpected = true;  // the paper's C everywhere
-  p.threshold_grey = 1000;         // nothing flagged here
+  p.unexpected_weight = 1.0;  // the paper's C everywhere
+  p.threshold_grey = 1000;    // nothing flagged here
   const auto out = ep::Compare(predicted, valid, c_pred, actual, p);
   EXPECT_FLOAT_EQ(out.error.at<float>(5, 5), 30.0F);
   EXPECT_NEAR(out.accumulated.at<float>(5, 5), (30.0 + 10.0 * 2.0) / 11.0, 1e-5);
@@ -39,6 +39,16 @@ TEST(VisualComparator, ImplementsThePapersEquations) {
   EXPECT_FLOAT_EQ(out.error.at<float>(0, 0), 0.0F);
   EXPECT_NEAR(out.mean_error, 30.0 / 400.0, 1e-9);
   EXPECT_NEAR(out.mean_attenuated, 30.0 * std::exp(-0.4) / 400.0, 1e-6);
+  // Above the threshold, the error feeds C with weight w: (w E + lambda C_-) / (w + lambda).
+  p.threshold_grey = 10;
+  p.min_region_area_px = 0;
+  p.open_radius_px = p.close_radius_px = 0;
+  p.unexpected_weight = 0.5;
+  const auto weighted = ep::Compare(predicted, valid, c_pred, actual, p);
+  EXPECT_NEAR(weighted.accumulated.at<float>(5, 5), (0.5 * 30.0 + 10.0 * 2.0) / 10.5, 1e-5);
+  p.unexpected_weight = 0.0;
+  EXPECT_FLOAT_EQ(ep::Compare(predicted, valid, c_pred, actual, p).accumulated.at<float>(5, 5),
+                  2.0F);
 }
 
 TEST(VisualComparator, AttenuatesWhereErrorsAreHabitualAndKeepsNewOnesSalient) {
