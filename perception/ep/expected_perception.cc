@@ -47,25 +47,25 @@ void CheckPose(const Eigen::Isometry3d& T) {
 constexpr float kMinPointDisparity = 0.25F;
 
 // Runs of `mask` pixels starting at an image edge line and going inwards: along rows from
-// column `start` (step +1 or -1), or along columns from row `start`. Marks the runs in `runs`
-// and returns the strip's thickness: the 75th percentile of the run lengths over all lines (a
-// strip along this edge makes most lines' runs equally long; a strip along a perpendicular edge
-// makes a few lines' runs very long, and must not count).
-int EdgeRuns(const cv::Mat& mask, bool along_rows, int start, int step, cv::Mat* runs) {
+// column `start` (step +1 or -1), or along columns from row `start`. Returns each line's run
+// length in `lengths` and the strip's thickness: the 75th percentile of the run lengths over
+// all lines (a strip along this edge makes most lines' runs equally long; a strip along a
+// perpendicular edge makes a few lines' runs very long, and must not count).
+int EdgeRuns(const cv::Mat& mask, bool along_rows, int start, int step, std::vector<int>* lengths) {
   const int W = mask.cols, H = mask.rows;
   const int lines = along_rows ? H : W;
-  std::vector<int> lengths(static_cast<size_t>(lines), 0);
+  lengths->assign(static_cast<size_t>(lines), 0);
   for (int i = 0; i < lines; ++i) {
     int n = 0;
     for (int j = start;; j += step, ++n) {
       const int u = along_rows ? j : i, v = along_rows ? i : j;
       if (u < 0 || v < 0 || u >= W || v >= H || !mask.at<uint8_t>(v, u)) break;
-      runs->at<uint8_t>(v, u) = 255;
     }
-    lengths[static_cast<size_t>(i)] = n;
+    (*lengths)[static_cast<size_t>(i)] = n;
   }
-  auto q = lengths.begin() + static_cast<std::ptrdiff_t>(3 * lengths.size() / 4);
-  std::nth_element(lengths.begin(), q, lengths.end());
+  std::vector<int> sorted = *lengths;
+  auto q = sorted.begin() + static_cast<std::ptrdiff_t>(3 * sorted.size() / 4);
+  std::nth_element(sorted.begin(), q, sorted.end());
   return *q;
 }
 
@@ -275,13 +275,22 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
                    {true, last_column, -1},
                    {false, 0, 1},
                    {false, size.height - 1, -1}};
+      std::vector<int> lengths;
       for (const auto& side : sides) {
-        cv::Mat runs(size, CV_8U, cv::Scalar(0));
-        if (EdgeRuns(pred.holes, side.rows, side.start, side.step, &runs) <
+        if (EdgeRuns(pred.holes, side.rows, side.start, side.step, &lengths) >=
             params_.border_batch_px) {
-          BlindMargins(first_column, last_column, &runs, 0);  // filled there, never deferred
-          recompute.setTo(0, runs);
-          deferred = deferred.empty() ? runs : (deferred | runs);
+          continue;  // thick enough: recomputed now
+        }
+        for (size_t i = 0; i < lengths.size(); ++i) {
+          for (int n = 0; n < lengths[i]; ++n) {
+            const int j = side.start + side.step * n;
+            const int u = side.rows ? j : static_cast<int>(i);
+            const int v = side.rows ? static_cast<int>(i) : j;
+            if (u < first_column || u > last_column) continue;  // filled there, never deferred
+            if (deferred.empty()) deferred = cv::Mat::zeros(size, CV_8U);
+            deferred.at<uint8_t>(v, u) = 255;
+            recompute.at<uint8_t>(v, u) = 0;
+          }
         }
       }
     }
