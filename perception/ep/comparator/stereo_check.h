@@ -16,7 +16,7 @@
 namespace epmap::ep {
 
 struct StereoCheckParams {
-  bool enabled = false;          // see the measurement in ../expected_perception.h
+  bool enabled = false;          // off by default: see the measurement in ../expected_perception.h
   double threshold_grey = 12.0;  // mean absolute difference over the window, grey levels
   int window_px = 5;             // averaging window (odd)
   int open_radius_px = 2;        // removes the thin fragments along depth edges
