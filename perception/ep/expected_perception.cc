@@ -219,7 +219,7 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
     } else {
       mode = FrameMode::kPredicted;
       auto t0 = Clock::now();
-      pred = Predict(state_, T_cur_prev, camera_, params_.prediction);
+      pred = Predict(state_, T_cur_prev, camera_, params_.prediction, &scratch_);
       res->timings.predict_ms = MsSince(t0);
       t0 = Clock::now();
       cmp = Compare(pred.image, pred.image_valid, pred.accumulated, Decimate(left, step),

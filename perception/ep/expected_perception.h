@@ -191,7 +191,8 @@ class ExpectedPerception {
   bool has_state_ = false;
   int64_t last_stamp_ns_ = 0;
   Eigen::Isometry3d last_T_base_cam0_ = Eigen::Isometry3d::Identity();
-  MapState state_;  // points of D^k (measured or filled), their flags, L^k, C^k
+  MapState state_;             // points of D^k (measured or filled), their flags, L^k, C^k
+  PredictionScratch scratch_;  // the generator's buffers, reused from frame to frame
 };
 
 }  // namespace epmap::ep

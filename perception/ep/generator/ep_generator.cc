@@ -272,8 +272,15 @@ cv::Mat PointsFromDisparity(const cv::Mat& disparity, const stereo::RectifiedGeo
 }
 
 Prediction Predict(const MapState& previous, const Eigen::Isometry3d& T_cur_prev,
-                   const stereo::RectifiedGeometry& camera, const PredictionParams& params) {
+                   const stereo::RectifiedGeometry& camera, const PredictionParams& params,
+                   PredictionScratch* scratch) {
   CheckInputs(previous, camera, T_cur_prev, params);
+  PredictionScratch local;
+  PredictionScratch& mem = scratch ? *scratch : local;
+  // Of the two point buffers, the one the previous state does not use.
+  cv::Mat& points_buffer = mem.points[0].data && mem.points[0].data == previous.points.data
+                               ? mem.points[1]
+                               : mem.points[0];
   const int W = camera.width, H = camera.height;
   Splat s;
   s.W = W;
@@ -302,9 +309,14 @@ Prediction Predict(const MapState& previous, const Eigen::Isometry3d& T_cur_prev
   //    those that land in its own half of the target rows; the few that cross the middle are
   //    written afterwards, in order (the camera moves little between frames).
   //    A pixel is empty while its disparity is 0; its point is then never read.
-  s.points.create(H, W, CV_32FC3);
-  s.flags = cv::Mat(H, W, CV_8U, cv::Scalar(0));
-  s.disparity = cv::Mat(H, W, CV_32F, cv::Scalar(0));
+  points_buffer.create(H, W, CV_32FC3);
+  mem.flags.create(H, W, CV_8U);
+  mem.splat_disparity.create(H, W, CV_32F);
+  s.points = points_buffer;
+  s.flags = mem.flags;
+  s.flags.setTo(0);
+  s.disparity = mem.splat_disparity;
+  s.disparity.setTo(0);
   float* dst_points = s.points.ptr<float>(0);  // all freshly allocated: continuous
   uint8_t* dst_flags = s.flags.ptr<uint8_t>(0);
   float* dst_disp = s.disparity.ptr<float>(0);
@@ -386,8 +398,10 @@ Prediction Predict(const MapState& previous, const Eigen::Isometry3d& T_cur_prev
 
   // The predicted disparity and the holes, at full resolution.
   Prediction out;
-  out.disparity.create(H, W, CV_32F);
-  out.geometry.create(H, W, CV_32F);
+  mem.disparity.create(H, W, CV_32F);
+  mem.geometry.create(H, W, CV_32F);
+  out.disparity = mem.disparity;
+  out.geometry = mem.geometry;
   out.holes.create(H, W, CV_8U);
   std::atomic<int> non_finite{0};
   cv::parallel_for_(cv::Range(0, H), [&](const cv::Range& rows) {
@@ -430,7 +444,8 @@ Prediction Predict(const MapState& previous, const Eigen::Isometry3d& T_cur_prev
   //    q = pi(X). L^k is sampled at q (full resolution), C^k at q / step.
   const int step = params.image_step;
   const cv::Size grid = ComparisonGrid(camera, step);
-  cv::Mat map_x(grid, CV_32F), map_y(grid, CV_32F), grid_x(grid, CV_32F), grid_y(grid, CV_32F);
+  for (cv::Mat* m : {&mem.map_x, &mem.map_y, &mem.grid_x, &mem.grid_y}) m->create(grid, CV_32F);
+  cv::Mat &map_x = mem.map_x, &map_y = mem.map_y, &grid_x = mem.grid_x, &grid_y = mem.grid_y;
   out.image_valid.create(grid, CV_8U);
   const float inv_step = 1.0F / static_cast<float>(step);
   cv::parallel_for_(cv::Range(0, grid.height), [&](const cv::Range& rows) {
@@ -470,7 +485,7 @@ Prediction Predict(const MapState& previous, const Eigen::Isometry3d& T_cur_prev
       }
     }
   });
-  cv::Mat image_k;
+  cv::Mat& image_k = mem.image;
   previous.image.convertTo(image_k, CV_32F);  // interpolate in float: no rounding of L_-
   cv::remap(image_k, out.image, map_x, map_y, cv::INTER_LINEAR, cv::BORDER_CONSTANT, 0);
   cv::remap(previous.accumulated, out.accumulated, grid_x, grid_y, cv::INTER_LINEAR,

@@ -85,12 +85,23 @@ struct Prediction {
   int non_finite_rejected = 0;  // values that came out non-finite and were made holes
 };
 
+// Memory a caller may lend to Predict so that the same large buffers are not allocated (and
+// first touched, page by page) at every frame: about a tenth of a frame's work. Predict writes
+// into it; the Prediction's points, flags, disparity and geometry then live there (the points
+// alternate between two buffers, so that a state made of the last prediction can be read while
+// the next one is written). Give one scratch to one pipeline; never publish what lives in it.
+struct PredictionScratch {
+  cv::Mat points[2], flags, splat_disparity, disparity, geometry;
+  cv::Mat map_x, map_y, grid_x, grid_y, image;
+};
+
 // T_cur_prev maps points of the previous camera frame into the current one
 // (T_cur_prev = T_base_cam0(k+1)^-1 * T_base_cam0(k)). Throws std::invalid_argument if the
 // state's images disagree in size or type with each other or with the camera, or if
 // T_cur_prev is not finite.
 Prediction Predict(const MapState& previous, const Eigen::Isometry3d& T_cur_prev,
-                   const stereo::RectifiedGeometry& camera, const PredictionParams& params = {});
+                   const stereo::RectifiedGeometry& camera, const PredictionParams& params = {},
+                   PredictionScratch* scratch = nullptr);
 
 // The size of the comparison grid for a camera and a step.
 cv::Size ComparisonGrid(const stereo::RectifiedGeometry& camera, int image_step);
