@@ -18,7 +18,10 @@ MappingService::MappingService(const ServiceConfig& config)
       queue_(config.queue_capacity),
       sensors_(counters_.rejected) {
   config_.Validate();
+  calibration_ = std::make_unique<CalibrationComponent>(config_, sensors_, counters_);
   pipeline_ = std::make_unique<Pipeline>(config_, queue_, sensors_, counters_, snapshots_);
+  pipeline_->AttachCalibration(&calibration_->active_models(), &calibration_->frame_tap(),
+                               config_.calibration.rectification_rebuild_deg);
 
   map_service_ = std::make_unique<MapServiceImpl>(*this);
   grpc::EnableDefaultHealthCheckService(true);
@@ -29,6 +32,7 @@ MappingService::MappingService(const ServiceConfig& config)
   builder.SetMaxReceiveMessageSize(config_.max_message_mb << 20);
   builder.SetMaxSendMessageSize(config_.max_message_mb << 20);
   builder.RegisterService(map_service_.get());
+  builder.RegisterService(calibration_->grpc_service());
   server_ = builder.BuildAndStart();
   if (!server_ || port == 0) {
     throw std::runtime_error("cannot serve gRPC on " + config_.listen +
@@ -38,6 +42,7 @@ MappingService::MappingService(const ServiceConfig& config)
 
   pipeline_->Start();
   ingest_ = std::make_unique<DdsIngest>(config_, queue_, sensors_, counters_);
+  ingest_->SetEyeHandCallback(calibration_->EyeHandSamplesCallback());
   server_->GetHealthCheckService()->SetServingStatus(true);
   spdlog::info("epmapd serving gRPC on {} ; DDS domain {} ; mode {}", bound_address_,
                config_.domain, config_.mode);
@@ -56,6 +61,7 @@ void MappingService::Shutdown() {
   ingest_.reset();  // no more DDS callbacks
   queue_.Close();
   if (pipeline_) pipeline_->Stop();
+  if (calibration_) calibration_->Shutdown();  // running jobs end INTERRUPTED
   if (server_) server_->Wait();
   spdlog::info("epmapd stopped");
 }
