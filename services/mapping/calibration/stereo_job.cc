@@ -1,5 +1,7 @@
 #include "services/mapping/calibration/stereo_job.h"
 
+#include <spdlog/spdlog.h>
+
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -150,6 +152,7 @@ StereoJobResult RunStereoJob(const v1::StereoExtrinsicsSpec& spec_in,
                                  0.2 * static_cast<double>(frames.size()) / n};
   };
   const auto keep_waiting = [&] { return !progress || progress(waiting()); };
+  calibration::ReportProgress(progress, waiting());
   while (static_cast<int>(frames.size()) < n) {
     auto frame = subscription->Next(timeout, keep_waiting);
     calibration::ReportProgress(progress, waiting());  // throws kCancelled if asked to stop
@@ -223,8 +226,13 @@ StereoJobResult RunStereoJob(const v1::StereoExtrinsicsSpec& spec_in,
       corrections.push_back(CorrectionOf(c.prior, r.model.T_cam0_cam1));
       used.push_back(&c);
       inliers += r.model.inliers;
+      spdlog::debug(
+          "stereo job frame {}: {} inliers, rms {:.3f} px, {:.3f} deg / {:.3f} deg from the prior",
+          i, r.model.inliers, r.model.rms_sampson_px, r.model.rotation_deviation_deg,
+          r.model.baseline_direction_deviation_deg);
     } catch (const CalibrationError& e) {
       if (e.code() == ErrorCode::kCancelled) throw;
+      spdlog::debug("stereo job frame {}: {}", i, e.what());
       auto& f = failures[e.code()];
       if (f.first++ == 0) f.second = e.what();
     }
