@@ -23,6 +23,12 @@ MappingService::MappingService(const ServiceConfig& config)
   pipeline_->AttachCalibration(&calibration_->active_models(), &calibration_->frame_tap(),
                                config_.calibration.rectification_rebuild_deg);
 
+  // Everything an RPC may touch exists before the server starts: a GetStatus arriving while
+  // DDS ingest was still being created used to find it null (a crash at start-up).
+  pipeline_->Start();
+  ingest_ = std::make_unique<DdsIngest>(config_, queue_, sensors_, counters_);
+  ingest_->SetEyeHandCallback(calibration_->EyeHandSamplesCallback());
+
   map_service_ = std::make_unique<MapServiceImpl>(*this);
   grpc::EnableDefaultHealthCheckService(true);
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
@@ -39,10 +45,6 @@ MappingService::MappingService(const ServiceConfig& config)
                              " (address in use or invalid?)");
   }
   bound_address_ = config_.listen.substr(0, config_.listen.rfind(':') + 1) + std::to_string(port);
-
-  pipeline_->Start();
-  ingest_ = std::make_unique<DdsIngest>(config_, queue_, sensors_, counters_);
-  ingest_->SetEyeHandCallback(calibration_->EyeHandSamplesCallback());
   server_->GetHealthCheckService()->SetServingStatus(true);
   spdlog::info("epmapd serving gRPC on {} ; DDS domain {} ; mode {}", bound_address_,
                config_.domain, config_.mode);
