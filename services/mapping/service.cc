@@ -58,12 +58,14 @@ void MappingService::Shutdown() {
   if (server_) {
     server_->GetHealthCheckService()->SetServingStatus(false);
     snapshots_.Close();  // wakes RPCs waiting for a newer frame
+    // Running calibration jobs end INTERRUPTED; their watchers see that and return.
+    if (calibration_) calibration_->Shutdown();
     server_->Shutdown(std::chrono::system_clock::now() + std::chrono::seconds(2));
   }
   ingest_.reset();  // no more DDS callbacks
   queue_.Close();
   if (pipeline_) pipeline_->Stop();
-  if (calibration_) calibration_->Shutdown();  // running jobs end INTERRUPTED
+  if (calibration_) calibration_->Shutdown();
   if (server_) server_->Wait();
   spdlog::info("epmapd stopped");
 }

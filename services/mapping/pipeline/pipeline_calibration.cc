@@ -40,6 +40,7 @@ const stereo::Rectifier* Pipeline::StereoModelRectifier(const StereoFrame& frame
     infos = sensors_.camera_infos();
   }
   const uint64_t rebuilds_before = model_rectification_->rebuilds();
+  const auto t0 = std::chrono::steady_clock::now();
   const stereo::Rectifier* rectifier = model_rectification_->For(
       model, infos, calibration::KinematicPrior(*chain_, *joints), &reason);
   if (!rectifier) {
@@ -47,6 +48,9 @@ const stereo::Rectifier* Pipeline::StereoModelRectifier(const StereoFrame& frame
     return nullptr;
   }
   if (model_rectification_->rebuilds() != rebuilds_before) {
+    stage_ms_.Add(
+        "stereo_model_maps",
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
     events_.Increment("stereo_model_rectification_rebuilt");
     if (rebuilds_before == 0) {
       spdlog::info("rectification from stereo model {}: fx {:.2f}, baseline {:.4f} m", model.id,
