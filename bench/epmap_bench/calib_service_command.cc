@@ -92,12 +92,13 @@ class Service {
       : address_("127.0.0.1:" + std::to_string(epmap::process::FreeTcpPort())) {
     fs::create_directories(work);
     const fs::path bin = fs::canonical("/proc/self/exe").parent_path();
-    std::vector<std::string> args = {"--listen", address_, "--domain", std::to_string(domain),
-                                     "--state-dir", (work / "state").string(), "--log-level",
-                                     "warn"};
+    std::vector<std::string> args = {"--listen",    address_,
+                                     "--domain",    std::to_string(domain),
+                                     "--state-dir", (work / "state").string(),
+                                     "--log-level", "warn"};
     args.insert(args.end(), extra.begin(), extra.end());
-    process_ = std::make_unique<epmap::process::ChildProcess>(bin / "epmapd", args,
-                                                              work / "epmapd.log");
+    process_ =
+        std::make_unique<epmap::process::ChildProcess>(bin / "epmapd", args, work / "epmapd.log");
     const auto deadline = Clock::now() + std::chrono::seconds(30);
     while (Clock::now() < deadline) {
       if (!process_->running()) break;
@@ -213,7 +214,8 @@ int RunEyeHand(const std::string& csv, int runs, const fs::path& work, uint32_t 
   std::printf(
       "{\"command\":\"calib-service\",\"case\":\"eye-hand-job\",\"samples\":%zu,\"runs\":%d,"
       "\"add_samples_ms\":%s,\"start_to_succeeded_ms\":%s,\"server_job_ms_median\":%s,"
-      "\"queued_ms_median\":%s,\"in_process_calibrate_ms\":%s,\"ratio_end_to_end_to_in_process\":%s,"
+      "\"queued_ms_median\":%s,\"in_process_calibrate_ms\":%s,\"ratio_end_to_end_to_in_process\":%"
+      "s,"
       "\"service\":{\"experts\":%u,\"initial_mean_m\":%s,\"train_mean_m\":%s,"
       "\"holdout_mean_m\":%s,\"holdout_count\":%u},"
       "\"in_process\":{\"holdout_mean_m\":%s,\"holdout_count\":%zu},"
@@ -266,8 +268,7 @@ VergenceRun RunVergenceJob(const fs::path& work, uint32_t domain, int frames,
   fs::create_directories(work);
   if (direction_prior_deg > 0) {
     std::ofstream config(work / "epmapd.yaml");
-    config << "calibration:\n  baseline_direction_prior_sigma_deg: " << direction_prior_deg
-           << "\n";
+    config << "calibration:\n  baseline_direction_prior_sigma_deg: " << direction_prior_deg << "\n";
     extra.push_back("--config");
     extra.push_back((work / "epmapd.yaml").string());
   }
@@ -306,8 +307,8 @@ int RunVergence(int frames, double direction_prior_deg, const fs::path& work, ui
   const CameraIntrinsics c0 = Intrinsics(scenario->cam0()), c1 = Intrinsics(scenario->cam1());
 
   std::vector<std::pair<std::string, VergenceRun>> runs;
-  runs.emplace_back("data_only", RunVergenceJob(work / "data-only", domain, frames,
-                                                urdf.string(), 0.0));
+  runs.emplace_back("data_only",
+                    RunVergenceJob(work / "data-only", domain, frames, urdf.string(), 0.0));
   if (direction_prior_deg > 0) {
     runs.emplace_back("with_direction_prior",
                       RunVergenceJob(work / "with-prior", domain + 1, frames, urdf.string(),
@@ -404,8 +405,8 @@ int Run(int argc, char** argv) {
                  "this (default 0.5; 0 = skip)");
   app.add_option("--domain", domain, "DDS domain (default 150; the vergence case uses two)");
   CLI11_PARSE(app, argc, argv);
-  const fs::path work = fs::temp_directory_path() / ("epmap-bench-calib-service-" +
-                                                     std::to_string(::getpid()));
+  const fs::path work =
+      fs::temp_directory_path() / ("epmap-bench-calib-service-" + std::to_string(::getpid()));
   fs::create_directories(work);
   int rc = 0;
   try {

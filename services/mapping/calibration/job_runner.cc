@@ -270,6 +270,10 @@ void JobRunner::Run(const std::shared_ptr<Live>& live) {
     } else {
       RunStereo(*live, progress, &model);
     }
+    // A cancel that came while the fit was finishing still means "no model".
+    if (live->cancel.load()) {
+      throw calibration::CalibrationError(calibration::ErrorCode::kCancelled, "cancelled");
+    }
     // The model and the job's success are one transaction: no model without a SUCCEEDED job.
     v1::Job finished;
     {
