@@ -134,6 +134,17 @@ void Apply(const YAML::Node& root, ServiceConfig& c) {
     s.RejectUnknownKeys();
   }
   {
+    auto s = top.Sub("calibration");
+    s.Get("worker_threads", c.calibration.worker_threads);
+    s.Get("stereo_frames", c.calibration.stereo_frames);
+    s.GetMs("stereo_frame_timeout_ms", c.calibration.stereo_frame_timeout_ns);
+    s.GetMs("stereo_frame_interval_ms", c.calibration.stereo_frame_interval_ns);
+    s.Get("stereo_min_success_share", c.calibration.stereo_min_success_share);
+    s.Get("baseline_direction_prior_sigma_deg", c.calibration.baseline_direction_prior_sigma_deg);
+    s.Get("rectification_rebuild_deg", c.calibration.rectification_rebuild_deg);
+    s.RejectUnknownKeys();
+  }
+  {
     auto s = top.Sub("log");
     s.Get("level", c.log_level);
     s.RejectUnknownKeys();
@@ -158,6 +169,26 @@ void ServiceConfig::Validate() const {
   if (camera.enabled && (camera.width <= 0 || camera.height <= 0 || camera.fx <= 0 ||
                          camera.fy <= 0 || camera.baseline_m <= 0)) {
     bad("robot.camera: width, height, fx, fy and baseline_m must be positive when enabled");
+  }
+  {
+    const auto& k = calibration;
+    if (k.worker_threads < 1 || k.worker_threads > 16) {
+      bad("calibration.worker_threads must be 1..16");
+    }
+    if (k.stereo_frames < 1 || k.stereo_frames > 1000) {
+      bad("calibration.stereo_frames must be 1..1000");
+    }
+    if (k.stereo_frame_timeout_ns <= 0) bad("calibration.stereo_frame_timeout_ms must be positive");
+    if (k.stereo_frame_interval_ns < 0) bad("calibration.stereo_frame_interval_ms must be >= 0");
+    if (!(k.stereo_min_success_share > 0 && k.stereo_min_success_share <= 1)) {
+      bad("calibration.stereo_min_success_share must be in (0, 1]");
+    }
+    if (!(k.baseline_direction_prior_sigma_deg >= 0)) {
+      bad("calibration.baseline_direction_prior_sigma_deg must be >= 0 (0 = off)");
+    }
+    if (!(k.rectification_rebuild_deg > 0)) {
+      bad("calibration.rectification_rebuild_deg must be > 0");
+    }
   }
   static const std::set<std::string> kLevels{"trace", "debug", "info", "warn", "error"};
   if (!kLevels.count(log_level)) bad("log.level must be trace, debug, info, warn or error");
@@ -252,6 +283,20 @@ std::string ToYaml(const ServiceConfig& c) {
   out << YAML::EndMap;
   out << YAML::Key << "state" << YAML::Value << YAML::BeginMap << YAML::Key << "dir" << YAML::Value
       << c.state_dir << YAML::EndMap;
+  out << YAML::Key << "calibration" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "worker_threads" << YAML::Value << c.calibration.worker_threads;
+  out << YAML::Key << "stereo_frames" << YAML::Value << c.calibration.stereo_frames;
+  out << YAML::Key << "stereo_frame_timeout_ms" << YAML::Value
+      << c.calibration.stereo_frame_timeout_ns / 1e6;
+  out << YAML::Key << "stereo_frame_interval_ms" << YAML::Value
+      << c.calibration.stereo_frame_interval_ns / 1e6;
+  out << YAML::Key << "stereo_min_success_share" << YAML::Value
+      << c.calibration.stereo_min_success_share;
+  out << YAML::Key << "baseline_direction_prior_sigma_deg" << YAML::Value
+      << c.calibration.baseline_direction_prior_sigma_deg;
+  out << YAML::Key << "rectification_rebuild_deg" << YAML::Value
+      << c.calibration.rectification_rebuild_deg;
+  out << YAML::EndMap;
   out << YAML::Key << "log" << YAML::Value << YAML::BeginMap << YAML::Key << "level" << YAML::Value
       << c.log_level << YAML::EndMap;
   out << YAML::EndMap;

@@ -22,6 +22,21 @@ struct ConfiguredCamera {
   double baseline_m = 0;    // the pair is taken as already rectified
 };
 
+// The calibration service (services/mapping/calibration/README.md).
+struct CalibrationSettings {
+  int worker_threads = 1;                            // jobs run on these, never on gRPC threads
+  uint32_t stereo_frames = 10;                       // frames a stereo job uses by default
+  int64_t stereo_frame_timeout_ns = 10'000'000'000;  // no frame for this long: the job fails
+  int64_t stereo_frame_interval_ns = 200'000'000;    // frames used at least this far apart
+  double stereo_min_success_share = 0.5;             // share of frames that must self-calibrate
+  // Optional Gaussian prior on the baseline direction (perception/calibration README); 0 = off,
+  // the paper's procedure (data only).
+  double baseline_direction_prior_sigma_deg = 0.0;
+  // With a stereo model active, the rectification maps are rebuilt when the frame's extrinsics
+  // differ from the maps' by more than this (rotation or baseline direction).
+  double rectification_rebuild_deg = 0.01;
+};
+
 struct ServiceConfig {
   // --- API ---
   std::string listen = "127.0.0.1:50051";  // gRPC address
@@ -49,6 +64,9 @@ struct ServiceConfig {
 
   // --- durable state ---
   std::string state_dir;                   // empty: no durable state (calibration disabled)
+
+  // --- calibration service ---
+  CalibrationSettings calibration;
 
   // --- logging ---
   std::string log_level = "info";          // trace | debug | info | warn | error

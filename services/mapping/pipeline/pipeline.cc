@@ -102,6 +102,9 @@ void Pipeline::Run() {
 }
 
 const stereo::Rectifier* Pipeline::CurrentRectifier(const StereoFrame& frame) {
+  if (const auto model = active_models_ ? active_models_->stereo() : nullptr) {
+    return StereoModelRectifier(frame, *model);
+  }
   if (config_.camera.enabled) {
     if (!rectifier_) {
       const auto [l, r] = FromConfig(config_.camera);
@@ -163,6 +166,7 @@ std::optional<Eigen::Isometry3d> Pipeline::PoseAt(int64_t stamp_ns) {
 
 void Pipeline::Process(StereoFrame& frame) {
   const auto t_start = Clock::now();
+  if (frame_tap_) frame_tap_->Offer(frame);  // raw frames for stereo-extrinsics jobs
   const stereo::Rectifier* rectifier = CurrentRectifier(frame);
   if (!rectifier) return;
 

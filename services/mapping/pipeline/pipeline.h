@@ -11,6 +11,9 @@
 #include "perception/kinematics/urdf_chain.h"
 #include "perception/stereo/rectification.h"
 #include "perception/stereo/sgbm.h"
+#include "services/mapping/calibration/active_models.h"
+#include "services/mapping/calibration/frame_tap.h"
+#include "services/mapping/calibration/model_rectification.h"
 #include "services/mapping/config/service_config.h"
 #include "services/mapping/ingest/bounded_queue.h"
 #include "services/mapping/ingest/dds_ingest.h"
@@ -37,12 +40,22 @@ class Pipeline {
   CounterSet& events() { return events_; }
   std::string mode() const;
 
+  // Calibration (services/mapping/calibration; pipeline_calibration.cc): the models the
+  // pipeline applies (an active stereo-extrinsics model replaces CameraInfo's R, P) and the tap
+  // through which stereo-extrinsics jobs see raw frames. Call before Start().
+  void AttachCalibration(const ActiveModels* models, RawFrameTap* tap,
+                         double rectification_rebuild_deg);
+
  private:
   void Run();
   void Process(StereoFrame& frame);
   // The rectifier for the current calibration; nullptr (and a counted rejection) if none.
   const stereo::Rectifier* CurrentRectifier(const StereoFrame& frame);
   std::optional<Eigen::Isometry3d> PoseAt(int64_t stamp_ns);
+  // The rectifier under the active stereo model, or nullptr (with a counted rejection); only
+  // called when a stereo model is active (pipeline_calibration.cc).
+  const stereo::Rectifier* StereoModelRectifier(const StereoFrame& frame,
+                                                const ActiveModels::Stereo& model);
 
   const ServiceConfig config_;
   BoundedQueue<StereoFrame>& queue_;
@@ -54,6 +67,10 @@ class Pipeline {
   stereo::SgbmMatcher matcher_;
   std::optional<stereo::Rectifier> rectifier_;
   uint64_t rectifier_version_ = ~0ull;
+
+  const ActiveModels* active_models_ = nullptr;
+  RawFrameTap* frame_tap_ = nullptr;
+  std::optional<ModelRectification> model_rectification_;
 
   RollingStats stage_ms_;
   RollingStats figures_;
