@@ -186,6 +186,11 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
   }
   const cv::Mat left = ToGrey(left_in, "left");
   const cv::Mat right = ToGrey(right_in, "right");
+  // SGBM matches the images as the cameras delivered them (colour when they are colour, as
+  // full-frame SGBM would); the comparator works on brightness.
+  const bool colour = left_in.type() == CV_8UC3 && right_in.type() == CV_8UC3;
+  const cv::Mat& stereo_left = colour ? left_in : left;
+  const cv::Mat& stereo_right = colour ? right_in : right;
   CheckPose(T_base_cam0);
   if (has_state_ && stamp_ns <= last_stamp_ns_) {
     throw std::invalid_argument("EP: stamp " + std::to_string(stamp_ns) +
@@ -344,13 +349,13 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
       expected.setTo(std::numeric_limits<float>::quiet_NaN(), uncertain);
     }
     const RoiStereoStats stats =
-        stereo_.ComputeMasked(left, right, recompute, res->disparity, expected);
+        stereo_.ComputeMasked(stereo_left, stereo_right, recompute, res->disparity, expected);
     res->recompute = recompute;
     res->recomputed_share = static_cast<double>(stats.target_pixels) / n_pixels;
     res->stereo_area_share = static_cast<double>(stats.computed_pixels) / n_pixels;
     res->sgbm_boxes = stats.boxes;
   } else {
-    res->disparity = stereo_.ComputeFull(left, right);
+    res->disparity = stereo_.ComputeFull(stereo_left, stereo_right);
     // SGBM's values in its blind margins are not kept (see RoiStereo::last_matchable_column);
     // on predicted frames the margins are never recomputed, so the map keeps what it had there.
     BlindMargins(first_column, last_column, &res->disparity,

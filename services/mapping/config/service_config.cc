@@ -1,5 +1,7 @@
 #include "services/mapping/config/service_config.h"
 
+#include "perception/ep/ep_settings.h"
+
 #include <yaml-cpp/yaml.h>
 
 #include <fstream>
@@ -145,6 +147,14 @@ void Apply(const YAML::Node& root, ServiceConfig& c) {
     s.RejectUnknownKeys();
   }
   {
+    auto s = top.Sub("ep");
+    s.Get("enabled", c.ep.enabled);
+    s.Get("pose_source", c.ep.pose_source);
+    s.Get("learned_model", c.ep.learned_model);
+    s.Get("params", c.ep.params);
+    s.RejectUnknownKeys();
+  }
+  {
     auto s = top.Sub("log");
     s.Get("level", c.log_level);
     s.RejectUnknownKeys();
@@ -190,6 +200,19 @@ void ServiceConfig::Validate() const {
       bad("calibration.rectification_rebuild_deg must be > 0");
     }
   }
+  static const std::set<std::string> kPoseSources{"auto", "urdf", "learned", "odometry", "fixed"};
+  if (!kPoseSources.count(ep.pose_source)) {
+    bad("ep.pose_source must be auto, urdf, learned, odometry or fixed");
+  }
+  if (ep.pose_source == "learned" && ep.learned_model.empty()) {
+    bad("ep.pose_source learned needs ep.learned_model (a file saved by epmap-bench ep "
+        "--internal-model learned --out DIR)");
+  }
+  try {
+    MakeEpParams(*this).Validate();
+  } catch (const std::invalid_argument& e) {
+    bad(std::string("ep.params: ") + e.what());
+  }
   static const std::set<std::string> kLevels{"trace", "debug", "info", "warn", "error"};
   if (!kLevels.count(log_level)) bad("log.level must be trace, debug, info, warn or error");
   try {
@@ -212,6 +235,18 @@ void ApplyYaml(const std::string& yaml_text, ServiceConfig& config) {
   }
   if (root.IsNull()) return;
   Apply(root, config);
+}
+
+ep::EpParams MakeEpParams(const ServiceConfig& config) {
+  ep::EpParams params;
+  for (const auto& [key, value] : config.ep.params) {
+    if (key.rfind("sgbm.", 0) == 0) {
+      throw std::invalid_argument("'" + key + "': SGBM is configured in the stereo section");
+    }
+    ep::SetEpParam(&params, key, value);
+  }
+  params.sgbm = config.sgbm;
+  return params;
 }
 
 ServiceConfig LoadServiceConfig(const std::filesystem::path& yaml_path) {
@@ -297,6 +332,13 @@ std::string ToYaml(const ServiceConfig& c) {
   out << YAML::Key << "rectification_rebuild_deg" << YAML::Value
       << c.calibration.rectification_rebuild_deg;
   out << YAML::EndMap;
+  out << YAML::Key << "ep" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "enabled" << YAML::Value << c.ep.enabled;
+  out << YAML::Key << "pose_source" << YAML::Value << c.ep.pose_source;
+  out << YAML::Key << "learned_model" << YAML::Value << c.ep.learned_model;
+  out << YAML::Key << "params" << YAML::Value << YAML::BeginMap;
+  for (const auto& [key, value] : c.ep.params) out << YAML::Key << key << YAML::Value << value;
+  out << YAML::EndMap << YAML::EndMap;
   out << YAML::Key << "log" << YAML::Value << YAML::BeginMap << YAML::Key << "level" << YAML::Value
       << c.log_level << YAML::EndMap;
   out << YAML::EndMap;

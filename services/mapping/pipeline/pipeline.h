@@ -8,6 +8,8 @@
 #include <optional>
 #include <thread>
 
+#include "perception/ep/expected_perception.h"
+#include "perception/internal_model/pose_source.h"
 #include "perception/kinematics/urdf_chain.h"
 #include "perception/stereo/rectification.h"
 #include "perception/stereo/sgbm.h"
@@ -20,6 +22,7 @@
 #include "services/mapping/ingest/sensor_state.h"
 #include "services/mapping/pipeline/map_snapshot.h"
 #include "services/mapping/pipeline/stage_stats.h"
+#include "services/mapping/pipeline/unexpected_events.h"
 
 namespace epmap::mapping {
 
@@ -39,6 +42,10 @@ class Pipeline {
   uint64_t full_refreshes() const { return full_refreshes_.load(); }
   CounterSet& events() { return events_; }
   std::string mode() const;
+  // Every frame's unexpected regions, for WatchUnexpected streams.
+  UnexpectedEventHub& unexpected_hub() { return unexpected_hub_; }
+  // The internal model in use: urdf, learned, odometry or fixed.
+  std::string EffectivePoseSource() const;
 
   // Calibration (services/mapping/calibration; pipeline_calibration.cc): the models the
   // pipeline applies (an active stereo-extrinsics model replaces CameraInfo's R, P) and the tap
@@ -51,7 +58,15 @@ class Pipeline {
   void Process(StereoFrame& frame);
   // The rectifier for the current calibration; nullptr (and a counted rejection) if none.
   const stereo::Rectifier* CurrentRectifier(const StereoFrame& frame);
-  std::optional<Eigen::Isometry3d> PoseAt(int64_t stamp_ns);
+  // The raw (unrectified) cam0 pose in the base frame at a stamp, from the internal model;
+  // nullopt with *reason when its inputs are missing (pipeline_ep.cc).
+  std::optional<Eigen::Isometry3d> PoseAt(int64_t stamp_ns, std::string* reason);
+  void SetUpPoseSource();
+  // The EP map of this frame into the snapshot (pipeline_ep.cc).
+  void RunExpectedPerception(const StereoFrame& frame, const stereo::Rectifier& rectifier,
+                             const cv::Mat& left, const cv::Mat& right,
+                             const std::optional<Eigen::Isometry3d>& raw_pose,
+                             const std::string& pose_reason, MapSnapshot& snapshot);
   // The rectifier under the active stereo model, or nullptr (with a counted rejection); only
   // called when a stereo model is active (pipeline_calibration.cc).
   const stereo::Rectifier* StereoModelRectifier(const StereoFrame& frame,
@@ -64,7 +79,13 @@ class Pipeline {
   SnapshotStore& snapshots_;
 
   std::optional<kinematics::UrdfChain> chain_;
-  stereo::SgbmMatcher matcher_;
+  std::string pose_source_;  // as configured (auto resolves per frame)
+  std::optional<internal_model::LearnedPoseSource> learned_;
+  std::vector<std::string> learned_inputs_;
+  stereo::SgbmMatcher matcher_;  // full-frame SGBM when EP is disabled
+  ep::EpParams ep_params_;
+  std::unique_ptr<ep::ExpectedPerception> ep_;
+  UnexpectedEventHub unexpected_hub_;
   std::optional<stereo::Rectifier> rectifier_;
   uint64_t rectifier_version_ = ~0ull;
 
