@@ -72,9 +72,9 @@ grpc::Status MapServiceImpl::GetDisparity(grpc::ServerContext* context,
                                           const v1::GetDisparityRequest* request,
                                           v1::DisparityMap* out) {
   if (request->wait_ms() > kMaxWaitMs) {
-    return {grpc::StatusCode::INVALID_ARGUMENT,
-            "wait_ms must be at most " + std::to_string(kMaxWaitMs) + ", got " +
-                std::to_string(request->wait_ms())};
+    return {grpc::StatusCode::INVALID_ARGUMENT, "wait_ms must be at most " +
+                                                    std::to_string(kMaxWaitMs) + ", got " +
+                                                    std::to_string(request->wait_ms())};
   }
   if (request->newer_than_ns() < 0) {
     return {grpc::StatusCode::INVALID_ARGUMENT, "newer_than_ns must not be negative"};

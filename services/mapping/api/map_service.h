@@ -16,6 +16,16 @@ class MapServiceImpl final : public v1::MapService::Service {
                          v1::ServiceStatus* response) override;
   grpc::Status GetDisparity(grpc::ServerContext* context, const v1::GetDisparityRequest* request,
                             v1::DisparityMap* response) override;
+  // Expected perception (paper 000), in map_service_ep.cc.
+  grpc::Status GetExpectation(grpc::ServerContext* context,
+                              const v1::GetExpectationRequest* request,
+                              v1::Expectation* response) override;
+  grpc::Status GetUnexpectedRegions(grpc::ServerContext* context,
+                                    const v1::GetUnexpectedRegionsRequest* request,
+                                    v1::UnexpectedRegions* response) override;
+  grpc::Status WatchUnexpected(grpc::ServerContext* context,
+                               const v1::WatchUnexpectedRequest* request,
+                               grpc::ServerWriter<v1::UnexpectedEvent>* writer) override;
 
  private:
   MappingService& service_;

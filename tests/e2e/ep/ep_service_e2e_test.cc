@@ -1,0 +1,247 @@
+// Expected perception in the running service: a recorded synthetic head (with its true
+// unexpected-motion masks) replayed over real DDS into a real epmapd that predicts from the
+// dataset's URDF; WatchUnexpected, GetUnexpectedRegions, GetExpectation and the epmapctl
+// commands built on them checked against the ground truth. Then the bad input of issue 4: a
+// URDF without cam0_optical, joints the URDF does not name, pose jumps beyond the bound.
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <mutex>
+#include <opencv2/imgcodecs.hpp>
+#include <thread>
+
+#include "common/dataset/dataset.h"
+#include "tests/support/epmapd_fixture.h"
+
+namespace epmap {
+namespace {
+
+namespace fs = std::filesystem;
+using std::chrono::seconds;
+
+constexpr int kFrames = 90;
+
+class EpServiceE2E : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    data_dir_ = new fs::path(testing::FreshTempDir("ep-head-data") / "head");
+    const auto [code, out] =
+        testing::RunToCompletion(testing::BinDir() / "epmap-sim",
+                                 {"record", "--scenario", "head", "--out", data_dir_->string(),
+                                  "--frames", std::to_string(kFrames), "--size", "320x240"},
+                                 data_dir_->parent_path() / "record.log", seconds(120));
+    ASSERT_EQ(code, 0) << out;
+  }
+  static void TearDownTestSuite() {
+    fs::remove_all(data_dir_->parent_path());
+    delete data_dir_;
+  }
+
+  static fs::path Urdf() { return *data_dir_ / "mav0" / "kinematics.urdf"; }
+
+  // Replays the recorded head at `rate` Hz into the service on `domain`.
+  static void Replay(uint32_t domain, const fs::path& work, int rate = 10) {
+    const auto [code, out] = testing::RunToCompletion(
+        testing::BinDir() / "epmap-replay",
+        {data_dir_->string(), "--domain", std::to_string(domain), "--rate", std::to_string(rate)},
+        work / "replay.log", seconds(120));
+    ASSERT_EQ(code, 0) << out;
+  }
+
+  static fs::path* data_dir_;
+};
+fs::path* EpServiceE2E::data_dir_ = nullptr;
+
+TEST_F(EpServiceE2E, WatchedRegionsFollowTheTrueMovingObject) {
+  const auto work = testing::FreshTempDir("ep-head");
+  const uint32_t domain = testing::UniqueDomainId(41);
+  testing::Epmapd epmapd(domain, {"--urdf", Urdf().string()}, work);
+  ASSERT_TRUE(epmapd.WaitReady()) << epmapd.process().Output();
+
+  // Every frame's event (empty ones included), collected while the replay runs.
+  std::mutex mutex;
+  std::vector<v1::UnexpectedEvent> events;
+  grpc::ClientContext watch_context;
+  v1::WatchUnexpectedRequest watch_request;
+  watch_request.set_include_empty(true);
+  auto reader = epmapd.stub().WatchUnexpected(&watch_context, watch_request);
+  std::thread watcher([&] {
+    v1::UnexpectedEvent event;
+    while (reader->Read(&event)) {
+      std::lock_guard lock(mutex);
+      events.push_back(event);
+    }
+  });
+  // epmapctl's stream too, as a person would run it: one JSON line per event.
+  testing::ChildProcess ctl_watch(
+      testing::BinDir() / "epmapctl",
+      {"--server", epmapd.address(), "watch-unexpected", "--count", "2", "--seconds", "60"},
+      work / "watch.log");
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));  // both streams subscribed
+
+  Replay(domain, work);
+  const auto status = epmapd.WaitStatus(
+      [](const v1::ServiceStatus& s) {
+        return s.frames_processed() + s.queue_dropped() + s.frames_rejected() >= kFrames;
+      },
+      seconds(60));
+  watch_context.TryCancel();
+  watcher.join();
+  ASSERT_EQ(ctl_watch.Wait(seconds(30)), 0) << ctl_watch.Output();
+
+  // Status: the EP stages are timed and most pixels are predicted, not recomputed.
+  EXPECT_GE(status.frames_processed(), kFrames * 3u / 4) << status.DebugString();
+  EXPECT_EQ(status.frames_rejected(), 0u) << status.DebugString();
+  EXPECT_LT(status.recomputed_share_median(), 0.5) << status.DebugString();
+  bool has_predict_stage = false;
+  for (const auto& s : status.stages()) has_predict_stage |= s.stage() == "ep.predict";
+  EXPECT_TRUE(has_predict_stage) << status.DebugString();
+
+  // Score the stream against the true masks: where the object is visible, the largest
+  // region's box must overlap it; where it is not, almost nothing may be flagged.
+  const dataset::Dataset d = dataset::Load(*data_dir_);
+  int visible = 0, hit = 0, absent = 0, quiet = 0;
+  for (const auto& e : events) {
+    const cv::Mat truth = dataset::LoadGtUnexpected(d, e.stamp_ns());
+    ASSERT_FALSE(truth.empty()) << "no true mask for stamp " << e.stamp_ns();
+    const double true_share = cv::countNonZero(truth) / static_cast<double>(truth.total());
+    if (e.frame_index() <= 1) continue;  // the first frame is computed whole: nothing compared
+    if (true_share > 0.01) {
+      ++visible;
+      if (e.regions_size() == 0) continue;
+      const auto& r = e.regions(0);  // largest first
+      const cv::Rect box(r.x(), r.y(), r.width(), r.height());
+      if (cv::countNonZero(truth(box & cv::Rect(0, 0, truth.cols, truth.rows))) > 0) ++hit;
+    } else if (true_share == 0.0) {
+      ++absent;
+      if (e.flagged_share() < 0.01) ++quiet;
+    }
+  }
+  std::printf(
+      "events %zu: object visible in %d (largest region on it in %d), absent in %d "
+      "(under 1%% flagged in %d)\n",
+      events.size(), visible, hit, absent, quiet);
+  ASSERT_GE(events.size(), static_cast<size_t>(kFrames / 2));
+  ASSERT_GT(visible, 5) << "the recorded object never showed: the test world changed";
+  EXPECT_GE(hit, visible * 8 / 10);
+  EXPECT_GE(quiet, absent * 9 / 10);
+
+  // epmapctl: the JSON stream, the five expectation images, the mask and the regions.
+  const std::string watched = ctl_watch.Output();
+  EXPECT_EQ(std::count(watched.begin(), watched.end(), '\n'), 2) << watched;
+  EXPECT_NE(watched.find("\"regions\""), std::string::npos) << watched;
+
+  const auto exp_dir = work / "expectation";
+  const auto [exp_code, exp_out] = testing::RunToCompletion(
+      testing::BinDir() / "epmapctl",
+      {"--server", epmapd.address(), "expectation", "--out", exp_dir.string()},
+      work / "expectation.log", seconds(30));
+  ASSERT_EQ(exp_code, 0) << exp_out;
+  for (const char* name : {"predicted", "error", "accumulated", "attenuated", "unexpected"}) {
+    const cv::Mat image = cv::imread((exp_dir / (std::string(name) + ".png")).string());
+    EXPECT_FALSE(image.empty()) << name;
+  }
+  EXPECT_EQ(cv::imread((exp_dir / "unexpected.png").string()).cols, 320);
+
+  const auto mask_path = work / "mask.png";
+  const auto [mask_code, mask_out] = testing::RunToCompletion(
+      testing::BinDir() / "epmapctl",
+      {"--server", epmapd.address(), "unexpected", "--out", mask_path.string()},
+      work / "unexpected.log", seconds(30));
+  ASSERT_EQ(mask_code, 0) << mask_out;
+  const cv::Mat mask = cv::imread(mask_path.string(), cv::IMREAD_UNCHANGED);
+  EXPECT_EQ(mask.size(), cv::Size(320, 240));
+  EXPECT_EQ(mask.type(), CV_8UC1);
+
+  // Invalid arguments are refused with a reason.
+  grpc::ClientContext bad_context;
+  v1::GetUnexpectedRegionsRequest bad_request;
+  bad_request.set_min_area_px(1u << 30);
+  v1::UnexpectedRegions ignored;
+  const auto bad = epmapd.stub().GetUnexpectedRegions(&bad_context, bad_request, &ignored);
+  EXPECT_EQ(bad.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << bad.error_message();
+
+  epmapd.process().Signal(SIGTERM);
+  EXPECT_EQ(epmapd.process().Wait(seconds(10)), 0) << epmapd.process().Output();
+  fs::remove_all(work);
+}
+
+TEST_F(EpServiceE2E, UrdfWithoutCam0OpticalIsAClearStartupError) {
+  const auto work = testing::FreshTempDir("ep-no-cam0");
+  const auto urdf = work / "no_camera.urdf";
+  std::ofstream(urdf) << R"(<?xml version="1.0"?>
+<robot name="no_camera">
+  <link name="base"/>
+  <link name="head"/>
+  <joint name="neck_yaw" type="revolute">
+    <parent link="base"/><child link="head"/><axis xyz="0 0 1"/>
+    <limit lower="-1" upper="1" effort="1" velocity="1"/>
+  </joint>
+</robot>
+)";
+  const auto [code, out] = testing::RunToCompletion(
+      testing::BinDir() / "epmapd",
+      {"--listen", "127.0.0.1:" + std::to_string(testing::FreeTcpPort()), "--domain",
+       std::to_string(testing::UniqueDomainId(42)), "--urdf", urdf.string()},
+      work / "epmapd.log", seconds(30));
+  EXPECT_NE(code, 0) << out;
+  EXPECT_NE(out.find("cam0_optical"), std::string::npos) << out;
+  fs::remove_all(work);
+}
+
+TEST_F(EpServiceE2E, JointsTheUrdfDoesNotNameRestartTheMapAndAreCounted) {
+  // The pan robot's chain names joints the head never publishes: no pose can be computed, so
+  // every frame is computed whole and counted, and the map is still served.
+  const auto work = testing::FreshTempDir("ep-wrong-joints");
+  const uint32_t domain = testing::UniqueDomainId(43);
+  const auto config = work / "epmapd.yaml";
+  std::ofstream(config) << "ep:\n  pose_source: urdf\n";
+  testing::Epmapd epmapd(domain,
+                         {"--config", config.string(), "--urdf",
+                          (testing::SourceDir() / "clients/sim/urdf/pan_robot.urdf").string()},
+                         work);
+  ASSERT_TRUE(epmapd.WaitReady()) << epmapd.process().Output();
+  Replay(domain, work, 15);
+  const auto status = epmapd.WaitStatus(
+      [](const v1::ServiceStatus& s) { return s.frames_processed() >= 10; }, seconds(60));
+  EXPECT_GE(status.frames_processed(), 10u) << status.DebugString();
+  uint64_t restarts = 0;
+  std::string reasons;
+  for (const auto& e : status.events()) {
+    if (e.reason().rfind("ep_restart_no_pose", 0) == 0) {
+      restarts += e.count();
+      reasons += e.reason() + "\n";
+    }
+  }
+  EXPECT_GE(restarts, status.frames_processed()) << status.DebugString();
+  EXPECT_EQ(status.full_refreshes(), status.frames_processed()) << status.DebugString();
+  grpc::ClientContext context;
+  v1::DisparityMap map;
+  ASSERT_TRUE(epmapd.stub().GetDisparity(&context, {}, &map).ok());
+  EXPECT_GT(map.valid_share(), 0.3);
+  std::printf("restart reasons:\n%s", reasons.c_str());
+  fs::remove_all(work);
+}
+
+TEST_F(EpServiceE2E, PoseJumpsBeyondTheBoundAreComputedWholeAndCounted) {
+  // A bound far below the head's motion per frame: every prediction is discarded.
+  const auto work = testing::FreshTempDir("ep-pose-jump");
+  const uint32_t domain = testing::UniqueDomainId(44);
+  const auto config = work / "epmapd.yaml";
+  std::ofstream(config) << "ep:\n  params: {\"max_rotation_step_rad\": \"0.00001\", "
+                           "\"max_translation_step_m\": \"0.000001\"}\n";
+  testing::Epmapd epmapd(domain, {"--config", config.string(), "--urdf", Urdf().string()}, work);
+  ASSERT_TRUE(epmapd.WaitReady()) << epmapd.process().Output();
+  Replay(domain, work, 15);
+  const auto status = epmapd.WaitStatus(
+      [](const v1::ServiceStatus& s) { return s.frames_processed() >= 20; }, seconds(60));
+  const uint64_t jumps = testing::Epmapd::Count(status.events(), "ep_pose_jump");
+  EXPECT_GE(jumps, 10u) << status.DebugString();
+  EXPECT_GE(status.full_refreshes(), jumps) << status.DebugString();
+  EXPECT_EQ(status.frames_rejected(), 0u) << status.DebugString();
+  fs::remove_all(work);
+}
+
+}  // namespace
+}  // namespace epmap
