@@ -30,7 +30,7 @@ DOMAIN=${EPMAP_DOMAIN:-42}
 PORT=${EPMAP_PORT:-50051}
 SERVER=127.0.0.1:$PORT
 mkdir -p "$OUT"
-rm -f "$OUT"/*.png "$OUT"/*.pfm "$OUT"/*.json "$OUT"/*.txt
+rm -rf "$OUT"/*.png "$OUT"/*.pfm "$OUT"/*.json "$OUT"/*.jsonl "$OUT"/*.txt "$OUT"/expectation
 
 PIDS=()
 cleanup() {
@@ -40,8 +40,9 @@ cleanup() {
 trap cleanup EXIT INT TERM
 
 echo "== epmapd on 127.0.0.1:$PORT, DDS domain $DOMAIN (log: $OUT/epmapd.log)"
+# The head's nearest surfaces (~0.38 m at 554 px focal length, 68 mm baseline) need ~100 px.
 $BIN/epmapd --listen "$SERVER" --domain "$DOMAIN" --urdf clients/sim/urdf/icub_head.urdf \
-  > "$OUT/epmapd.log" 2>&1 &
+  --num-disparities 112 > "$OUT/epmapd.log" 2>&1 &
 PIDS+=($!)
 for _ in $(seq 1 100); do
   $BIN/epmapctl --server "$SERVER" --timeout 1 status > /dev/null 2>&1 && break
@@ -57,11 +58,20 @@ $BIN/epmap-sim publish --scenario head --domain "$DOMAIN" --rate 30 --frames "$F
 SIM=$!
 PIDS+=($SIM)
 
+# What moves on its own, as it happens: one JSON line per frame with unexpected regions.
+$BIN/epmapctl --server "$SERVER" watch-unexpected --min-area 200 > "$OUT/unexpected_events.jsonl" \
+  2> "$OUT/watch.log" &
+PIDS+=($!)
+
 # The client: every few seconds, read the maps and write them out.
 snapshot() {
   $BIN/epmapctl --server "$SERVER" disparity --out "$OUT/disparity.png" --wait-ms 10000 \
     > /dev/null || return 0
   $BIN/epmapctl --server "$SERVER" disparity --out "$OUT/disparity.pfm" > /dev/null || true
+  $BIN/epmapctl --server "$SERVER" expectation --out "$OUT/expectation" > "$OUT/expectation.txt" \
+    2>&1 || true
+  $BIN/epmapctl --server "$SERVER" unexpected --out "$OUT/unexpected.png" > "$OUT/unexpected.txt" \
+    2>&1 || true
   $BIN/epmapctl --server "$SERVER" status > "$OUT/status.txt" || true
   $BIN/epmapctl --server "$SERVER" status --json > "$OUT/status.json" || true
 }
@@ -78,5 +88,10 @@ echo
 echo "== summary (full status in $OUT/status.txt)"
 sed -n '1,6p' "$OUT/status.txt"
 echo
+echo "expected perception (paper 000): $(cat "$OUT/expectation.txt" 2>/dev/null | sed 's/^wrote [^ ]* //')"
+echo "unexpected now: $(sed -n 2p "$OUT/unexpected.txt" 2>/dev/null)"
+echo "frames with something moving on its own: $(wc -l < "$OUT/unexpected_events.jsonl") (JSON lines in $OUT/unexpected_events.jsonl)"
+echo
 echo "maps written to $OUT/:"
-ls -1 "$OUT" | grep -E '\.(png|pfm|json)$' | sed 's/^/  /'
+ls -1 "$OUT" | grep -E '\.(png|pfm|json|jsonl)$' | sed 's/^/  /'
+ls -1 "$OUT/expectation" 2>/dev/null | sed 's|^|  expectation/|'
