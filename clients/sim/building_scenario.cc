@@ -213,17 +213,7 @@ class BuildingScenario final : public Scenario {
 
  private:
   dataset::CameraSensor Sensor(const Eigen::Isometry3d& T_base_cam) const {
-    dataset::CameraSensor s;
-    s.width = camera_.width;
-    s.height = camera_.height;
-    s.fu = camera_.fx;
-    s.fv = camera_.fy;
-    s.cu = camera_.cx;
-    s.cv = camera_.cy;
-    s.distortion = {0, 0, 0, 0};
-    s.T_BS = T_base_cam.matrix();
-    s.rate_hz = kRateHz;
-    return s;
+    return SensorDescription(camera_, T_base_cam, kRateHz);
   }
 
   std::vector<dataset::WallSegment> ToWorld(const std::vector<dataset::WallSegment>& in) const {

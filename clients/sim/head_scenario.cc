@@ -145,17 +145,7 @@ class HeadScenario final : public Scenario {
   }
 
   dataset::CameraSensor Sensor(const Eigen::Isometry3d& T_base_cam) const {
-    dataset::CameraSensor s;
-    s.width = camera_.width;
-    s.height = camera_.height;
-    s.fu = camera_.fx;
-    s.fv = camera_.fy;
-    s.cu = camera_.cx;
-    s.cv = camera_.cy;
-    s.distortion = {0, 0, 0, 0};
-    s.T_BS = T_base_cam.matrix();
-    s.rate_hz = kRateHz;
-    return s;
+    return SensorDescription(camera_, T_base_cam, kRateHz);
   }
 
   std::vector<double> TrueJoints(double t) const {
