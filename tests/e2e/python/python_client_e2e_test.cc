@@ -33,6 +33,8 @@ TEST(PythonClientE2E, PlannerExampleReadsDepthAhead) {
   EXPECT_NE(out.find("\"width\": 450"), std::string::npos) << out;
   EXPECT_NE(out.find("\"depth_ahead_median_m\": "), std::string::npos) << out;
   EXPECT_EQ(out.find("\"depth_ahead_median_m\": null"), std::string::npos) << out;
+  // A single still pair: expected perception has compared nothing, so nothing moved.
+  EXPECT_NE(out.find("\"moving_on_its_own\": []"), std::string::npos) << out;
   std::filesystem::remove_all(work);
 }
 
