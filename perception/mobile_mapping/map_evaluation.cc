@@ -41,6 +41,26 @@ bool Near(const Eigen::Vector2d& q, const std::vector<Segment2>& segments, doubl
   return false;
 }
 
+// True if segment [a, b] touches the closed box [lo, hi] (Liang-Barsky clipping).
+bool SegmentTouchesBox(const Eigen::Vector2d& a, const Eigen::Vector2d& b,
+                       const Eigen::Vector2d& lo, const Eigen::Vector2d& hi) {
+  const double eps = 1e-9;
+  double t0 = 0, t1 = 1;
+  const Eigen::Vector2d d = b - a;
+  for (int k = 0; k < 2; ++k) {
+    if (std::abs(d[k]) < 1e-15) {
+      if (a[k] < lo[k] - eps || a[k] > hi[k] + eps) return false;
+      continue;
+    }
+    double ta = (lo[k] - eps - a[k]) / d[k], tb = (hi[k] + eps - a[k]) / d[k];
+    if (ta > tb) std::swap(ta, tb);
+    t0 = std::max(t0, ta);
+    t1 = std::min(t1, tb);
+    if (t0 > t1) return false;
+  }
+  return true;
+}
+
 }  // namespace
 
 double TotalLength(const std::vector<Segment2>& segments) {
@@ -98,19 +118,27 @@ GridScore ScoreGrid(const occupancy::GridExport& g, const std::vector<Segment2>&
   GridScore score;
   const size_t n = static_cast<size_t>(g.width) * g.height;
   if (n == 0 || g.occupancy.size() != n) return score;
+  // Supercover rasterisation: every cell whose closed square the wall touches (a wall along
+  // a cell boundary marks the cells on both sides, as either could hold its surface).
   std::vector<uint8_t> wall(n, 0);
   const double res = g.resolution_m;
   for (const auto& w : walls) {
-    const Eigen::Vector2d d = w.b - w.a;
-    const int steps = std::max(1, static_cast<int>(std::ceil(d.norm() / (0.25 * res))));
-    for (int k = 0; k <= steps; ++k) {
-      const Eigen::Vector2d p = w.a + d * (static_cast<double>(k) / steps);
-      const long c = static_cast<long>(std::floor((p.x() - g.origin_x) / res));
-      const long r = static_cast<long>(std::floor((p.y() - g.origin_y) / res));
-      if (c < 0 || r < 0 || c >= static_cast<long>(g.width) || r >= static_cast<long>(g.height)) {
-        continue;
+    const double x0 = std::min(w.a.x(), w.b.x()), x1 = std::max(w.a.x(), w.b.x());
+    const double y0 = std::min(w.a.y(), w.b.y()), y1 = std::max(w.a.y(), w.b.y());
+    const long c0 = std::max(0L, static_cast<long>(std::floor((x0 - g.origin_x) / res)) - 1);
+    const long c1 = std::min(static_cast<long>(g.width) - 1,
+                             static_cast<long>(std::floor((x1 - g.origin_x) / res)) + 1);
+    const long r0 = std::max(0L, static_cast<long>(std::floor((y0 - g.origin_y) / res)) - 1);
+    const long r1 = std::min(static_cast<long>(g.height) - 1,
+                             static_cast<long>(std::floor((y1 - g.origin_y) / res)) + 1);
+    for (long r = r0; r <= r1; ++r) {
+      for (long c = c0; c <= c1; ++c) {
+        const Eigen::Vector2d lo(g.origin_x + c * res, g.origin_y + r * res);
+        const Eigen::Vector2d hi = lo + Eigen::Vector2d(res, res);
+        if (SegmentTouchesBox(w.a, w.b, lo, hi)) {
+          wall[static_cast<size_t>(r) * g.width + static_cast<size_t>(c)] = 1;
+        }
       }
-      wall[static_cast<size_t>(r) * g.width + static_cast<size_t>(c)] = 1;
     }
   }
   size_t uni = 0, uni_obs = 0;

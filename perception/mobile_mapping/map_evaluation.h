@@ -40,7 +40,8 @@ struct GridScore {
   size_t intersection = 0;
 };
 
-// Rasterises the walls at the grid's resolution and lattice and compares them with the cells
+// Rasterises the walls at the grid's resolution and lattice (every cell the wall line touches)
+// and compares them with the cells
 // whose occupancy is at or above occupied_threshold (0..100; map_server's 0.65 -> 65).
 GridScore ScoreGrid(const occupancy::GridExport& grid, const std::vector<Segment2>& walls,
                     uint8_t occupied_threshold = 65);

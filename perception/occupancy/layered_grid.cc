@@ -258,25 +258,51 @@ cv::Mat LayeredGrid::SyntheticMap() const {
 
 GridExport LayeredGrid::Export(std::optional<int> layer, double unknown_below) const {
   if (layer) CheckLayer(*layer);
-  GridExport e;
-  e.resolution_m = params_.resolution_m;
-  e.origin_x = origin().x();
-  e.origin_y = origin().y();
-  e.width = static_cast<uint32_t>(width_);
-  e.height = static_cast<uint32_t>(height_);
-  e.layer_count = static_cast<uint32_t>(layer_count());
-  e.layer_bounds_m = params_.layer_bounds_m;
-  e.combined = !layer.has_value();
-  e.layer = layer ? static_cast<uint32_t>(*layer) : 0;
-  const size_t n = static_cast<size_t>(width_) * static_cast<size_t>(height_);
-  e.occupancy.assign(n, GridExport::kUnknown);
-  e.confidence.assign(n, 0);
+  // The cells of the layer (or the combined map), and the box around the known ones: the
+  // export is cropped to it, one unknown cell of margin around.
+  std::vector<Cell> cells(static_cast<size_t>(width_) * static_cast<size_t>(height_));
+  int c_lo = width_, c_hi = -1, r_lo = height_, r_hi = -1;
   for (int r = 0; r < height_; ++r) {
     for (int c = 0; c < width_; ++c) {
       const Cell cell =
           layer ? At(*layer, min_ix_ + c, min_iy_ + r) : Combined(min_ix_ + c, min_iy_ + r);
-      const size_t i =
-          static_cast<size_t>(r) * static_cast<size_t>(width_) + static_cast<size_t>(c);
+      cells[static_cast<size_t>(r) * static_cast<size_t>(width_) + static_cast<size_t>(c)] = cell;
+      if (cell.confidence >= unknown_below) {
+        c_lo = std::min(c_lo, c);
+        c_hi = std::max(c_hi, c);
+        r_lo = std::min(r_lo, r);
+        r_hi = std::max(r_hi, r);
+      }
+    }
+  }
+  if (c_hi < 0) {
+    c_lo = r_lo = 0;
+    c_hi = r_hi = -1;
+  } else {
+    c_lo = std::max(0, c_lo - 1);
+    r_lo = std::max(0, r_lo - 1);
+    c_hi = std::min(width_ - 1, c_hi + 1);
+    r_hi = std::min(height_ - 1, r_hi + 1);
+  }
+  GridExport e;
+  e.resolution_m = params_.resolution_m;
+  e.origin_x = static_cast<double>(min_ix_ + c_lo) * params_.resolution_m;
+  e.origin_y = static_cast<double>(min_iy_ + r_lo) * params_.resolution_m;
+  e.width = static_cast<uint32_t>(c_hi - c_lo + 1);
+  e.height = static_cast<uint32_t>(r_hi - r_lo + 1);
+  e.layer_count = static_cast<uint32_t>(layer_count());
+  e.layer_bounds_m = params_.layer_bounds_m;
+  e.combined = !layer.has_value();
+  e.layer = layer ? static_cast<uint32_t>(*layer) : 0;
+  const size_t n = static_cast<size_t>(e.width) * e.height;
+  e.occupancy.assign(n, GridExport::kUnknown);
+  e.confidence.assign(n, 0);
+  for (uint32_t r = 0; r < e.height; ++r) {
+    for (uint32_t c = 0; c < e.width; ++c) {
+      const Cell& cell =
+          cells[static_cast<size_t>(r + static_cast<uint32_t>(r_lo)) * static_cast<size_t>(width_) +
+                c + static_cast<uint32_t>(c_lo)];
+      const size_t i = static_cast<size_t>(r) * e.width + c;
       e.confidence[i] =
           static_cast<uint8_t>(std::lround(255.0 * std::clamp(cell.confidence, 0.0F, 1.0F)));
       if (cell.confidence < unknown_below) continue;

@@ -38,7 +38,10 @@ struct MeasurementParams {
   // The ray stops giving empty evidence this many range sigmas before the point (at least one
   // cell), so the point's own uncertainty never clears it.
   double empty_gap_sigmas = 2.0;
-  double max_range_m = 20.0;  // farther points are ignored
+  // Farther points are ignored: at 8 m a stereo point of this rig is uncertain by more than
+  // half a metre (z^2 sigma_d / f b), too vague for a 10 cm grid, and its ray would clear
+  // walls it passes by.
+  double max_range_m = 8.0;
   void Validate() const;
 };
 
@@ -116,8 +119,9 @@ class LayeredGrid {
   // (paper 002, Sec. 4), CV_32FC1 of height() x width(), row r = lattice row min_iy() + r.
   cv::Mat SyntheticMap() const;
 
-  // Export of one layer, or the combined map when layer is empty. Throws std::out_of_range
-  // for a layer that does not exist. Cells with confidence below unknown_below are unknown.
+  // Export of one layer, or the combined map when layer is empty, cropped to the known cells
+  // (plus one cell). Throws std::out_of_range for a layer that does not exist. Cells with
+  // confidence below unknown_below are unknown.
   GridExport Export(std::optional<int> layer = std::nullopt, double unknown_below = 0.05) const;
 
   // Weighted averaging of a registered local map into this one (paper 002, Sec. 4, as [16]):
