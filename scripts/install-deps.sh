@@ -6,6 +6,8 @@ set -euo pipefail
 PACKAGES=(
   # toolchain
   build-essential cmake pkg-config git ca-certificates python3
+  # the planner-side Python example (clients/python)
+  python3-grpcio python3-protobuf
   # middleware: Fast DDS (ROS 2 wire-compatible), gRPC + Protobuf
   libfastrtps-dev libfastcdr-dev fastddsgen fastdds-tools
   libgrpc++-dev protobuf-compiler-grpc libprotobuf-dev protobuf-compiler

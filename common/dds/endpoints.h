@@ -126,21 +126,19 @@ class Reader : public eprosima::fastdds::dds::DataReaderListener {
   void on_data_available(eprosima::fastdds::dds::DataReader* reader) override {
     eprosima::fastdds::dds::SampleInfo info;
     Msg msg;
-    while (true) {
+    // Bounded: a sample that fails to decode must not keep us here.
+    for (int attempt = 0; attempt < 1024; ++attempt) {
       TakeVerdict();  // clear
-      if (reader->take_next_sample(&msg, &info) != ReturnCode_t::RETCODE_OK) break;
-      switch (TakeVerdict()) {
-        case PayloadVerdict::kOversized:
-          counters_.oversized++;
-          msg = Msg();
-          continue;
-        case PayloadVerdict::kMalformed:
-          counters_.malformed++;
-          msg = Msg();
-          continue;
-        case PayloadVerdict::kOk:
-          break;
+      const ReturnCode_t code = reader->take_next_sample(&msg, &info);
+      // Fast DDS drops a sample whose deserialize() failed (take returns an error for it):
+      // the verdict says why, and the next sample may still be fine.
+      const PayloadVerdict verdict = TakeVerdict();
+      if (verdict != PayloadVerdict::kOk) {
+        (verdict == PayloadVerdict::kOversized ? counters_.oversized : counters_.malformed)++;
+        msg = Msg();
+        continue;
       }
+      if (code != ReturnCode_t::RETCODE_OK) break;
       if (!info.valid_data) continue;
       counters_.received++;
       on_sample_(std::move(msg));

@@ -18,7 +18,7 @@ struct SgbmParams {
   int speckle_range = 32;
   int disp12_max_diff = 0;  // <= 0 disables the left-right check (OpenCV's default)
   int pre_filter_cap = 0;
-  int mode = 3;  // cv::StereoSGBM::MODE_SGBM_3WAY
+  int mode = 2;  // cv::StereoSGBM::MODE_SGBM_3WAY (0 SGBM, 1 HH, 3 HH4)
 
   // Throws std::invalid_argument with the reason if the values cannot work.
   void Validate() const;

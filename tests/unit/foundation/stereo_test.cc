@@ -23,8 +23,8 @@ TEST(Sgbm, MatchesTheReferenceTableOnCones) {
   const cv::Mat disp = stereo::ComputeDisparity(left, right, p);
   const auto score =
       stereo::ScoreDisparity(disp, dataset::LoadGtDisparity(d, d.frames[0].stamp_ns));
-  EXPECT_NEAR(score.bad_counting_unknown(), 0.215, 0.01);
-  EXPECT_NEAR(score.filled_share(), 0.831, 0.01);
+  EXPECT_NEAR(score.bad_counting_unknown(), 0.215, 0.002);
+  EXPECT_NEAR(score.filled_share(), 0.831, 0.002);
 }
 
 TEST(Sgbm, RejectsBadParameters) {

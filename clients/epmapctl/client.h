@@ -1,0 +1,41 @@
+#pragma once
+// What every epmapctl subcommand shares: the server address, the call deadline, the channel
+// (with receive limits raised for large maps) and uniform error reporting.
+
+#include <grpcpp/grpcpp.h>
+
+#include <CLI/CLI.hpp>
+#include <functional>
+#include <memory>
+#include <string>
+#include <opencv2/core.hpp>
+#include <vector>
+
+namespace epmap::ctl {
+
+struct ClientOptions {
+  std::string server = "127.0.0.1:50051";
+  double timeout_s = 30.0;
+  int exit_code = 0;
+
+  std::shared_ptr<grpc::Channel> Channel() const;
+  // A context with the deadline applied.
+  std::unique_ptr<grpc::ClientContext> Context() const;
+  // Prints "epmapctl: <CODE>: <message>" and returns 1 for a failed call.
+  int Fail(const grpc::Status& status) const;
+};
+
+// Subcommands register a setup function that adds themselves to the app.
+using CommandSetup = std::function<void(CLI::App& app, ClientOptions& options)>;
+std::vector<CommandSetup>& CommandSetups();
+struct CommandRegistrar {
+  explicit CommandRegistrar(CommandSetup setup) { CommandSetups().push_back(std::move(setup)); }
+};
+
+// Writes an image file chosen by extension; throws std::runtime_error on failure.
+void WriteImageFile(const std::string& path, const cv::Mat& image);
+
+}  // namespace epmap::ctl
+
+#define EPMAP_CTL_COMMAND(ident, setup) \
+  static ::epmap::ctl::CommandRegistrar ident##_registrar(setup)

@@ -1,0 +1,102 @@
+// epmapctl status [--json]: counters, timings and health of the service.
+
+#include <google/protobuf/util/json_util.h>
+
+#include <cstdio>
+#include <iostream>
+
+#include "clients/epmapctl/client.h"
+#include "epmap/v1/map_service.grpc.pb.h"
+
+namespace {
+
+using epmap::ctl::ClientOptions;
+
+void PrintHuman(const epmap::v1::ServiceStatus& s) {
+  std::printf("epmapd %s, up %.1f s, mode %s\n", s.version().c_str(), s.uptime_s(),
+              s.mode().c_str());
+  std::printf("frames: %llu received, %llu processed, %llu rejected, %llu dropped in queue "
+              "(depth %u/%u)\n",
+              static_cast<unsigned long long>(s.frames_received()),
+              static_cast<unsigned long long>(s.frames_processed()),
+              static_cast<unsigned long long>(s.frames_rejected()),
+              static_cast<unsigned long long>(s.queue_dropped()), s.queue_depth(),
+              s.queue_capacity());
+  if (s.last_stamp_ns()) {
+    std::printf("last frame stamp: %lld ns\n", static_cast<long long>(s.last_stamp_ns()));
+  }
+  std::printf("ingest-to-snapshot latency: p50 %.1f ms, p99 %.1f ms\n", s.latency_ms_p50(),
+              s.latency_ms_p99());
+  std::printf("recomputed share: last %.3f, median %.3f; full refreshes %llu\n",
+              s.recomputed_share_last(), s.recomputed_share_median(),
+              static_cast<unsigned long long>(s.full_refreshes()));
+  if (s.rejected_by_reason_size()) {
+    std::printf("rejected:\n");
+    for (const auto& c : s.rejected_by_reason()) {
+      std::printf("  %-44s %llu\n", c.reason().c_str(), static_cast<unsigned long long>(c.count()));
+    }
+  }
+  if (s.queue_drops_by_reason_size()) {
+    std::printf("queue drops:\n");
+    for (const auto& c : s.queue_drops_by_reason()) {
+      std::printf("  %-44s %llu\n", c.reason().c_str(), static_cast<unsigned long long>(c.count()));
+    }
+  }
+  if (s.transport_lost_by_topic_size()) {
+    std::printf("lost in transport:\n");
+    for (const auto& c : s.transport_lost_by_topic()) {
+      std::printf("  %-44s %llu\n", c.reason().c_str(), static_cast<unsigned long long>(c.count()));
+    }
+  }
+  std::printf("messages by topic:\n");
+  for (const auto& c : s.messages_by_topic()) {
+    std::printf("  %-44s %llu\n", c.reason().c_str(), static_cast<unsigned long long>(c.count()));
+  }
+  if (s.stages_size()) {
+    std::printf("stages (ms):            last   median      p99  samples\n");
+    for (const auto& t : s.stages()) {
+      std::printf("  %-18s %8.2f %8.2f %8.2f %8llu\n", t.stage().c_str(), t.last_ms(),
+                  t.median_ms(), t.p99_ms(), static_cast<unsigned long long>(t.samples()));
+    }
+  }
+  if (s.events_size()) {
+    std::printf("events:\n");
+    for (const auto& c : s.events()) {
+      std::printf("  %-44s %llu\n", c.reason().c_str(), static_cast<unsigned long long>(c.count()));
+    }
+  }
+  if (!s.active_eye_hand_model().empty() || !s.active_stereo_model().empty()) {
+    std::printf("active models: eye-hand %s, stereo %s\n", s.active_eye_hand_model().c_str(),
+                s.active_stereo_model().c_str());
+  }
+}
+
+void Setup(CLI::App& app, ClientOptions& options) {
+  auto* cmd = app.add_subcommand("status", "counters, timings and health of epmapd");
+  auto json = std::make_shared<bool>(false);
+  cmd->add_flag("--json", *json, "print the status as JSON");
+  cmd->callback([&options, json] {
+    auto stub = epmap::v1::MapService::NewStub(options.Channel());
+    epmap::v1::ServiceStatus status;
+    const auto context = options.Context();
+    const grpc::Status rpc = stub->GetStatus(context.get(), {}, &status);
+    if (!rpc.ok()) {
+      options.exit_code = options.Fail(rpc);
+      return;
+    }
+    if (*json) {
+      std::string text;
+      google::protobuf::util::JsonPrintOptions print;
+      print.always_print_primitive_fields = true;
+      print.preserve_proto_field_names = true;
+      (void)google::protobuf::util::MessageToJsonString(status, &text, print);
+      std::cout << text << "\n";
+    } else {
+      PrintHuman(status);
+    }
+  });
+}
+
+}  // namespace
+
+EPMAP_CTL_COMMAND(status, Setup);

@@ -1,0 +1,1 @@
+// The building floor of scenario `building` (in progress).

@@ -1,0 +1,263 @@
+#include "clients/sim/publish.h"
+
+#include <epmap_dds/CameraInfoPubSubTypes.h>
+#include <epmap_dds/EyeHandSamplesPubSubTypes.h>
+#include <epmap_dds/ImagePubSubTypes.h>
+#include <epmap_dds/JointStatePubSubTypes.h>
+#include <epmap_dds/OdometryPubSubTypes.h>
+
+#include <condition_variable>
+#include <deque>
+#include <map>
+#include <mutex>
+#include <stdexcept>
+#include <thread>
+
+#include "common/dds/endpoints.h"
+#include "common/dds/participant.h"
+#include "common/dds/ros_conversions.h"
+
+namespace epmap::sim {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+int64_t WallClockNs() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+void Log(const PublishOptions& o, const std::string& message) {
+  if (o.log) o.log(message);
+}
+
+// CameraInfo of a calibrated driver (REP 104): K, D = 0, R = I, P = K [I | t] with
+// P[3] = -fx * B for the right camera of a rectified pair; an unrectified rig has P = K [I | 0].
+dds::CameraCalibration Calibration(const dataset::CameraSensor& cam, double tx) {
+  dds::CameraCalibration c;
+  c.width = cam.width;
+  c.height = cam.height;
+  c.distortion_model = "plumb_bob";
+  c.d = {0, 0, 0, 0, 0};
+  c.k = {cam.fu, 0, cam.cu, 0, cam.fv, cam.cv, 0, 0, 1};
+  c.p = {cam.fu, 0, cam.cu, tx, 0, cam.fv, cam.cv, 0, 0, 0, 1, 0};
+  return c;
+}
+
+// A bounded queue of rendered frames between the render thread and the sender.
+class FrameQueue {
+ public:
+  explicit FrameQueue(size_t capacity) : capacity_(capacity) {}
+  // Blocks while full; returns false if closed.
+  bool Push(SimFrame frame) {
+    std::unique_lock lock(mutex_);
+    space_.wait(lock, [&] { return closed_ || queue_.size() < capacity_; });
+    if (closed_) return false;
+    queue_.push_back(std::move(frame));
+    ready_.notify_one();
+    return true;
+  }
+  // Blocks until a frame is there; nullopt once closed and drained.
+  std::optional<SimFrame> Pop() {
+    std::unique_lock lock(mutex_);
+    ready_.wait(lock, [&] { return closed_ || !queue_.empty(); });
+    if (queue_.empty()) return std::nullopt;
+    SimFrame f = std::move(queue_.front());
+    queue_.pop_front();
+    space_.notify_one();
+    return f;
+  }
+  void Close() {
+    std::lock_guard lock(mutex_);
+    closed_ = true;
+    ready_.notify_all();
+    space_.notify_all();
+  }
+
+ private:
+  size_t capacity_;
+  std::mutex mutex_;
+  std::condition_variable ready_, space_;
+  std::deque<SimFrame> queue_;
+  bool closed_ = false;
+};
+
+PublishReport PublishEyeHand(const Scenario& scenario, const PublishOptions& o) {
+  dds::Participant participant(o.domain_id, "epmap-sim");
+  dds::Writer<epmap_msgs::msg::EyeHandSamples, epmap_msgs::msg::EyeHandSamplesPubSubType> writer(
+      participant, o.topics.eye_hand_samples);
+  PublishReport report;
+  report.readers_matched = writer.WaitForReaders(1, o.wait_for_readers);
+  if (!report.readers_matched) {
+    Log(o, "warning: no reader matched " + o.topics.eye_hand_samples + " within " +
+               std::to_string(o.wait_for_readers.count()) + " ms; sending anyway");
+  }
+  std::this_thread::sleep_for(o.grace);
+  // One message per path, in path order.
+  std::map<std::string, std::vector<EyeHandSample>> paths;
+  for (const auto& s : scenario.EyeHandSamples()) paths[s.path].push_back(s);
+  const double rate = o.rate_hz > 0 ? o.rate_hz : scenario.rate_hz();
+  const int64_t wall0 = WallClockNs();
+  report.first_stamp_ns = wall0;
+  const auto t0 = Clock::now();
+  const int64_t scenario0 = scenario.options().start_stamp_ns;
+  int n = 0;
+  for (const auto& [name, samples] : paths) {
+    if (o.stop_requested && o.stop_requested()) break;
+    if (!o.as_fast_as_possible) {
+      std::this_thread::sleep_until(t0 + std::chrono::duration_cast<Clock::duration>(
+                                             std::chrono::duration<double>(n / rate)));
+    }
+    epmap_msgs::msg::EyeHandSamples msg;
+    const int64_t stamp = wall0 + (samples.back().stamp_ns - scenario0);
+    msg.header().stamp(dds::FromNanoseconds(stamp));
+    msg.header().frame_id("base_link");
+    msg.set_name("sim-eye-hand-seed" + std::to_string(scenario.options().seed));
+    for (const auto& s : samples) {
+      epmap_msgs::msg::EyeHandSample m;
+      m.stamp(dds::FromNanoseconds(wall0 + (s.stamp_ns - scenario0)));
+      m.xa({s.xa.x(), s.xa.y(), s.xa.z()});
+      m.xb({s.xb.x(), s.xb.y(), s.xb.z()});
+      m.path(s.path);
+      msg.samples().push_back(m);
+    }
+    writer.Write(msg);
+    ++n;
+  }
+  report.frames_sent = n;
+  report.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+  writer.WaitForAcknowledgments(std::chrono::milliseconds(2000));
+  std::this_thread::sleep_for(o.grace);
+  return report;
+}
+
+}  // namespace
+
+PublishReport Publish(const Scenario& scenario, const PublishOptions& o) {
+  if (!(o.rate_hz >= 0)) throw std::invalid_argument("publish rate must be >= 0 Hz");
+  if (scenario.frame_count() == 0) return PublishEyeHand(scenario, o);
+
+  dds::Participant participant(o.domain_id, "epmap-sim");
+  using ImageWriter = dds::Writer<sensor_msgs::msg::Image, sensor_msgs::msg::ImagePubSubType>;
+  using InfoWriter =
+      dds::Writer<sensor_msgs::msg::CameraInfo, sensor_msgs::msg::CameraInfoPubSubType>;
+  ImageWriter left(participant, o.topics.left_image);
+  ImageWriter right(participant, o.topics.right_image);
+  InfoWriter left_info(participant, o.topics.left_info);
+  InfoWriter right_info(participant, o.topics.right_info);
+  dds::Writer<sensor_msgs::msg::JointState, sensor_msgs::msg::JointStatePubSubType> joints(
+      participant, o.topics.joints);
+  std::unique_ptr<dds::Writer<nav_msgs::msg::Odometry, nav_msgs::msg::OdometryPubSubType>> odom;
+  if (scenario.has_odometry()) {
+    odom =
+        std::make_unique<dds::Writer<nav_msgs::msg::Odometry, nav_msgs::msg::OdometryPubSubType>>(
+            participant, o.topics.odom);
+  }
+
+  // Render ahead while discovery runs.
+  const int total = scenario.frame_count();
+  FrameQueue queue(3);
+  std::exception_ptr render_error;
+  std::thread renderer([&] {
+    try {
+      for (int i = 0; i < total; ++i) {
+        if (!queue.Push(scenario.Render(i))) return;
+      }
+    } catch (...) {
+      render_error = std::current_exception();
+    }
+    queue.Close();
+  });
+  struct JoinOnExit {
+    FrameQueue& q;
+    std::thread& t;
+    ~JoinOnExit() {
+      q.Close();
+      if (t.joinable()) t.join();
+    }
+  } join_on_exit{queue, renderer};
+
+  PublishReport report;
+  const auto deadline = Clock::now() + o.wait_for_readers;
+  const auto remaining = [&] {
+    return std::chrono::duration_cast<std::chrono::milliseconds>(
+        std::max(Clock::duration::zero(), deadline - Clock::now()));
+  };
+  report.readers_matched =
+      left.WaitForReaders(1, remaining()) && right.WaitForReaders(1, remaining());
+  if (!report.readers_matched) {
+    Log(o, "warning: no reader matched both image topics within " +
+               std::to_string(o.wait_for_readers.count()) + " ms; sending anyway");
+  }
+  std::this_thread::sleep_for(o.grace);
+
+  const dataset::CameraSensor cam0 = scenario.cam0(), cam1 = scenario.cam1();
+  const double baseline = scenario.rectified() ? (cam0.T_BS.inverse() * cam1.T_BS)(0, 3) : 0.0;
+  const dds::CameraCalibration calib0 = Calibration(cam0, 0.0);
+  const dds::CameraCalibration calib1 = Calibration(cam1, -cam1.fu * baseline);
+  const std::vector<std::string> names = scenario.joint_names();
+  const double rate = o.rate_hz > 0 ? o.rate_hz : scenario.rate_hz();
+  const int64_t scenario0 = scenario.StampNs(0);
+
+  sensor_msgs::msg::Image left_msg, right_msg;
+  sensor_msgs::msg::CameraInfo info_msg;
+  sensor_msgs::msg::JointState joint_msg;
+  const int64_t wall0 = WallClockNs();
+  report.first_stamp_ns = wall0;
+  const auto t0 = Clock::now();
+  int sent = 0;
+  while (auto frame = queue.Pop()) {
+    if (o.stop_requested && o.stop_requested()) break;
+    if (!o.as_fast_as_possible) {
+      const auto due = t0 + std::chrono::duration_cast<Clock::duration>(
+                                std::chrono::duration<double>(sent / rate));
+      if (Clock::now() > due + std::chrono::milliseconds(5)) {
+        ++report.late_frames;
+      } else {
+        std::this_thread::sleep_until(due);
+      }
+    }
+    // The frame's stamp on the wall clock; at a custom rate, frame i is due at i / rate.
+    const int64_t stamp =
+        rate == scenario.rate_hz()
+            ? wall0 + (frame->stamp_ns - scenario0)
+            : wall0 + static_cast<int64_t>(std::llround(frame->index * 1e9 / rate));
+    dds::ToJointState({stamp, names, frame->joints}, &joint_msg);
+    joints.Write(joint_msg);
+    if (odom && frame->odometry) {
+      nav_msgs::msg::Odometry odom_msg;
+      dds::ToOdometry({stamp, frame->odometry->x, frame->odometry->y, frame->odometry->theta},
+                      "odom", "base_link", &odom_msg);
+      odom->Write(odom_msg);
+    }
+    dds::ToCameraInfo(calib0, stamp, "cam0_optical", &info_msg);
+    left_info.Write(info_msg);
+    dds::ToCameraInfo(calib1, stamp, "cam1_optical", &info_msg);
+    right_info.Write(info_msg);
+    dds::MatToImage(frame->left, stamp, "cam0_optical", &left_msg);
+    dds::MatToImage(frame->right, stamp, "cam1_optical", &right_msg);
+    left.Write(left_msg);
+    right.Write(right_msg);
+    ++sent;
+  }
+  if (renderer.joinable()) {
+    queue.Close();
+    renderer.join();
+  }
+  if (render_error) std::rethrow_exception(render_error);
+  report.frames_sent = sent;
+  report.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+  // Let reliable readers catch up before the participant goes away.
+  left.WaitForAcknowledgments(std::chrono::milliseconds(2000));
+  right.WaitForAcknowledgments(std::chrono::milliseconds(2000));
+  std::this_thread::sleep_for(o.grace);
+  if (report.late_frames > 0) {
+    Log(o, "warning: " + std::to_string(report.late_frames) + " of " + std::to_string(sent) +
+               " frames were sent late (rendering slower than " + std::to_string(rate) + " Hz)");
+  }
+  return report;
+}
+
+}  // namespace epmap::sim

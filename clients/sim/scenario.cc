@@ -1,0 +1,95 @@
+#include "clients/sim/scenario.h"
+
+#include <cmath>
+#include <stdexcept>
+
+#include "clients/sim/scenario_factories.h"
+
+namespace epmap::sim {
+
+int64_t Scenario::StampNs(int index) const {
+  return options_.start_stamp_ns + std::llround(index * 1e9 / rate_hz());
+}
+
+void Scenario::CheckIndex(int index) const {
+  if (frame_count() == 0) {
+    throw std::logic_error("scenario '" + options_.name + "' has no images to render");
+  }
+  if (index < 0 || index >= frame_count()) {
+    throw std::out_of_range("frame " + std::to_string(index) + " is outside [0, " +
+                            std::to_string(frame_count()) + ") of scenario '" + options_.name +
+                            "'");
+  }
+}
+
+std::string Scenario::Describe() const {
+  return options_.name + ": " + std::to_string(frame_count()) + " frames, seed " +
+         std::to_string(options_.seed);
+}
+
+std::vector<std::string> ScenarioNames() {
+  return {"head", "vergence", "building", "eye-hand"};
+}
+
+std::unique_ptr<Scenario> MakeScenario(const ScenarioOptions& options) {
+  std::string known;
+  for (const auto& n : ScenarioNames()) known += (known.empty() ? "" : ", ") + n;
+  const std::string& name = options.name;
+  bool found = false;
+  for (const auto& n : ScenarioNames()) found |= n == name;
+  if (!found) {
+    throw std::invalid_argument("unknown scenario '" + name + "' (known: " + known + ")");
+  }
+  if (options.width < 0 || options.height < 0 || (options.width == 0) != (options.height == 0)) {
+    throw std::invalid_argument("image size " + std::to_string(options.width) + "x" +
+                                std::to_string(options.height) +
+                                " is not valid: width and height must both be positive");
+  }
+  if (options.width > 8192 || options.height > 8192) {
+    throw std::invalid_argument("image size " + std::to_string(options.width) + "x" +
+                                std::to_string(options.height) + " is too large (max 8192)");
+  }
+  if (options.frames < 0) {
+    throw std::invalid_argument("frame count " + std::to_string(options.frames) +
+                                " is negative (0 = the scenario's default)");
+  }
+  if (!(options.encoder_noise_scale >= 0) || !(options.flicker_scale >= 0) ||
+      !std::isfinite(options.encoder_noise_scale) || !std::isfinite(options.flicker_scale)) {
+    throw std::invalid_argument("noise and flicker scales must be finite and >= 0");
+  }
+  if (options.reverse && name != "building") {
+    throw std::invalid_argument("--reverse applies to the building scenario only");
+  }
+  if (name == "eye-hand" && (options.width > 0 || options.frames > 0)) {
+    throw std::invalid_argument(
+        "eye-hand has no images: --size and --frames do not apply (20 ellipsoidal paths of 100 "
+        "samples)");
+  }
+  if (name == "head") return MakeHeadScenario(options, false);
+  if (name == "vergence") return MakeHeadScenario(options, true);
+  if (name == "building") return MakeBuildingScenario(options);
+  return MakeEyeHandScenario(options);
+}
+
+std::pair<int, int> ParseImageSize(const std::string& text) {
+  const auto x = text.find_first_of("xX");
+  const auto fail = [&]() -> std::pair<int, int> {
+    throw std::invalid_argument("image size '" + text +
+                                "' is not valid: expected WxH with both positive, e.g. 320x240");
+  };
+  if (x == std::string::npos || x == 0 || x + 1 >= text.size()) return fail();
+  size_t used_w = 0, used_h = 0;
+  long w = 0, h = 0;
+  try {
+    w = std::stol(text.substr(0, x), &used_w);
+    h = std::stol(text.substr(x + 1), &used_h);
+  } catch (const std::exception&) {
+    return fail();
+  }
+  if (used_w != x || used_h != text.size() - x - 1 || w <= 0 || h <= 0 || w > 8192 || h > 8192) {
+    return fail();
+  }
+  return {static_cast<int>(w), static_cast<int>(h)};
+}
+
+}  // namespace epmap::sim

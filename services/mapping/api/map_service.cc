@@ -1,0 +1,113 @@
+#include "services/mapping/api/map_service.h"
+
+#include "services/mapping/api/proto_conversions.h"
+#include "services/mapping/service.h"
+
+namespace epmap::mapping {
+
+namespace {
+
+constexpr uint32_t kMaxWaitMs = 30000;
+
+void AddCounters(const std::vector<std::pair<std::string, uint64_t>>& counts,
+                 google::protobuf::RepeatedPtrField<v1::Counter>* out) {
+  for (const auto& [reason, n] : counts) {
+    auto* c = out->Add();
+    c->set_reason(reason);
+    c->set_count(n);
+  }
+}
+
+}  // namespace
+
+grpc::Status MapServiceImpl::GetStatus(grpc::ServerContext*, const v1::GetStatusRequest*,
+                                       v1::ServiceStatus* out) {
+  auto& pipeline = service_.pipeline();
+  auto& counters = service_.counters();
+  out->set_version(EPMAP_VERSION);
+  out->set_uptime_s(service_.uptime_s());
+  out->set_mode(pipeline.mode());
+  for (const auto& t : service_.ingest().CollectTopicCounters()) {
+    auto* c = out->add_messages_by_topic();
+    c->set_reason(t.topic);
+    c->set_count(t.received);
+    if (t.lost) {
+      auto* lost = out->add_transport_lost_by_topic();
+      lost->set_reason(t.topic);
+      lost->set_count(t.lost);
+    }
+  }
+  out->set_frames_received(counters.frames_assembled.load());
+  out->set_frames_processed(pipeline.frames_processed());
+  out->set_frames_rejected(counters.rejected.Total());
+  AddCounters(counters.rejected.Snapshot(), out->mutable_rejected_by_reason());
+  out->set_queue_dropped(counters.queue_drops.Total());
+  AddCounters(counters.queue_drops.Snapshot(), out->mutable_queue_drops_by_reason());
+  out->set_queue_depth(static_cast<uint32_t>(service_.queue().size()));
+  out->set_queue_capacity(static_cast<uint32_t>(service_.queue().capacity()));
+  for (const auto& [stage, s] : pipeline.stage_ms().Summaries()) {
+    auto* t = out->add_stages();
+    t->set_stage(stage);
+    t->set_last_ms(s.last);
+    t->set_median_ms(s.median);
+    t->set_p99_ms(s.p99);
+    t->set_samples(s.samples);
+  }
+  if (const auto latest = service_.snapshots().Latest()) out->set_last_stamp_ns(latest->stamp_ns);
+  const auto latency = pipeline.figures().Summary("latency_ms");
+  out->set_latency_ms_p50(latency.median);
+  out->set_latency_ms_p99(latency.p99);
+  const auto share = pipeline.figures().Summary("recomputed_share");
+  out->set_recomputed_share_last(share.last);
+  out->set_recomputed_share_median(share.median);
+  out->set_full_refreshes(pipeline.full_refreshes());
+  AddCounters(pipeline.events().Snapshot(), out->mutable_events());
+  return grpc::Status::OK;
+}
+
+grpc::Status MapServiceImpl::GetDisparity(grpc::ServerContext* context,
+                                          const v1::GetDisparityRequest* request,
+                                          v1::DisparityMap* out) {
+  if (request->wait_ms() > kMaxWaitMs) {
+    return {grpc::StatusCode::INVALID_ARGUMENT,
+            "wait_ms must be at most " + std::to_string(kMaxWaitMs) + ", got " +
+                std::to_string(request->wait_ms())};
+  }
+  if (request->newer_than_ns() < 0) {
+    return {grpc::StatusCode::INVALID_ARGUMENT, "newer_than_ns must not be negative"};
+  }
+  const auto deadline =
+      std::chrono::steady_clock::now() + std::chrono::milliseconds(request->wait_ms());
+  auto snapshot = service_.snapshots().Latest();
+  while ((!snapshot || snapshot->stamp_ns <= request->newer_than_ns()) &&
+         std::chrono::steady_clock::now() < deadline && !context->IsCancelled() &&
+         !service_.shutting_down()) {
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
+        deadline - std::chrono::steady_clock::now());
+    snapshot = service_.snapshots().WaitNewer(snapshot ? snapshot->frame_index : 0,
+                                              std::min(left, std::chrono::milliseconds(200)));
+  }
+  if (!snapshot) {
+    return {grpc::StatusCode::UNAVAILABLE,
+            "no frame has been processed yet (is a stereo source publishing on domain " +
+                std::to_string(service_.config().domain) + "?)"};
+  }
+  if (snapshot->stamp_ns <= request->newer_than_ns()) {
+    return {grpc::StatusCode::DEADLINE_EXCEEDED,
+            "no frame newer than the requested stamp arrived within wait_ms"};
+  }
+  out->set_stamp_ns(snapshot->stamp_ns);
+  out->set_frame_index(snapshot->frame_index);
+  ToProto(snapshot->camera, out->mutable_camera());
+  ToProto(snapshot->disparity, out->mutable_disparity());
+  out->set_min_disparity(snapshot->min_disparity);
+  out->set_num_disparities(snapshot->num_disparities);
+  out->set_valid_share(snapshot->valid_share);
+  out->set_recomputed_share(snapshot->recomputed_share);
+  if (snapshot->T_base_cam0) {
+    ToProto(*snapshot->T_base_cam0, "base", "cam0_optical", out->mutable_camera_pose());
+  }
+  return grpc::Status::OK;
+}
+
+}  // namespace epmap::mapping

@@ -1,0 +1,24 @@
+#pragma once
+// epmap.v1.MapService: reads the pipeline's newest snapshot and the service's counters.
+// Never blocks the pipeline; invalid arguments get INVALID_ARGUMENT with a message.
+
+#include <epmap/v1/map_service.grpc.pb.h>
+
+namespace epmap::mapping {
+
+class MappingService;
+
+class MapServiceImpl final : public v1::MapService::Service {
+ public:
+  explicit MapServiceImpl(MappingService& service) : service_(service) {}
+
+  grpc::Status GetStatus(grpc::ServerContext* context, const v1::GetStatusRequest* request,
+                         v1::ServiceStatus* response) override;
+  grpc::Status GetDisparity(grpc::ServerContext* context, const v1::GetDisparityRequest* request,
+                            v1::DisparityMap* response) override;
+
+ private:
+  MappingService& service_;
+};
+
+}  // namespace epmap::mapping

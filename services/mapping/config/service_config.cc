@@ -1,0 +1,261 @@
+#include "services/mapping/config/service_config.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <fstream>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+namespace epmap::mapping {
+
+namespace {
+
+// Reads the keys of one YAML mapping, remembering which were read so that leftovers (typos)
+// can be reported.
+class Section {
+ public:
+  // A missing or empty section (`robot:` with nothing under it) keeps every default.
+  Section(const YAML::Node& node, std::string path)
+      : node_(node), present_(node.IsDefined() && !node.IsNull()), path_(std::move(path)) {
+    if (present_ && !node_.IsMap()) throw std::invalid_argument(path_ + ": expected a mapping");
+  }
+
+  // Call after reading every known key: a key nobody read is a typo or a stale setting.
+  void RejectUnknownKeys() const {
+    if (!present_) return;
+    for (const auto& kv : node_) {
+      const auto key = kv.first.as<std::string>();
+      if (!seen_.count(key)) {
+        throw std::invalid_argument("unknown setting '" + Join(key) + "'");
+      }
+    }
+  }
+
+  template <class T>
+  void Get(const std::string& key, T& out) {
+    seen_.insert(key);
+    if (!present_) return;
+    const YAML::Node value = node_[key];
+    if (!value.IsDefined() || value.IsNull()) return;
+    try {
+      out = value.as<T>();
+    } catch (const YAML::Exception&) {
+      throw std::invalid_argument("setting '" + Join(key) + "' has the wrong type");
+    }
+  }
+  // Durations are written in milliseconds in the file and kept in nanoseconds.
+  void GetMs(const std::string& key, int64_t& out_ns) {
+    double ms = static_cast<double>(out_ns) / 1e6;
+    Get(key, ms);
+    out_ns = static_cast<int64_t>(ms * 1e6);
+  }
+  Section Sub(const std::string& key) {
+    seen_.insert(key);
+    return Section(present_ ? node_[key] : YAML::Node(YAML::NodeType::Null), Join(key));
+  }
+
+ private:
+  std::string Join(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
+  const YAML::Node node_;  // const: looking up a missing key must not create it
+  bool present_;
+  std::string path_;
+  std::set<std::string> seen_;
+};
+
+void Apply(const YAML::Node& root, ServiceConfig& c) {
+  Section top(root, "");
+  {
+    auto s = top.Sub("api");
+    s.Get("listen", c.listen);
+    s.Get("max_message_mb", c.max_message_mb);
+    s.RejectUnknownKeys();
+  }
+  {
+    auto s = top.Sub("dds");
+    s.Get("domain", c.domain);
+    s.Get("shared_memory_transport", c.shared_memory_transport);
+    s.Get("max_image_bytes", c.max_image_bytes);
+    auto t = s.Sub("topics");
+    t.Get("left_image", c.topics.left_image);
+    t.Get("right_image", c.topics.right_image);
+    t.Get("left_camera_info", c.topics.left_info);
+    t.Get("right_camera_info", c.topics.right_info);
+    t.Get("joint_states", c.topics.joints);
+    t.Get("odometry", c.topics.odom);
+    t.Get("eye_hand_samples", c.topics.eye_hand_samples);
+    t.RejectUnknownKeys();
+    s.RejectUnknownKeys();
+  }
+  {
+    auto s = top.Sub("ingest");
+    s.GetMs("pair_tolerance_ms", c.pair_tolerance_ns);
+    s.GetMs("pair_timeout_ms", c.pair_timeout_ns);
+    s.GetMs("camera_info_wait_ms", c.camera_info_wait_ns);
+    s.GetMs("joints_max_gap_ms", c.joints_max_gap_ns);
+    s.GetMs("joints_wait_ms", c.joints_wait_ns);
+    s.Get("queue_capacity", c.queue_capacity);
+    s.RejectUnknownKeys();
+  }
+  {
+    auto s = top.Sub("robot");
+    s.Get("mode", c.mode);
+    s.Get("urdf", c.urdf);
+    auto cam = s.Sub("camera");
+    cam.Get("enabled", c.camera.enabled);
+    cam.Get("width", c.camera.width);
+    cam.Get("height", c.camera.height);
+    cam.Get("fx", c.camera.fx);
+    cam.Get("fy", c.camera.fy);
+    cam.Get("cx", c.camera.cx);
+    cam.Get("cy", c.camera.cy);
+    cam.Get("baseline_m", c.camera.baseline_m);
+    cam.RejectUnknownKeys();
+    s.RejectUnknownKeys();
+  }
+  {
+    auto s = top.Sub("stereo");
+    s.Get("min_disparity", c.sgbm.min_disparity);
+    s.Get("num_disparities", c.sgbm.num_disparities);
+    s.Get("block_size", c.sgbm.block_size);
+    s.Get("p1", c.sgbm.p1);
+    s.Get("p2", c.sgbm.p2);
+    s.Get("uniqueness_ratio", c.sgbm.uniqueness_ratio);
+    s.Get("speckle_window", c.sgbm.speckle_window);
+    s.Get("speckle_range", c.sgbm.speckle_range);
+    s.Get("disp12_max_diff", c.sgbm.disp12_max_diff);
+    s.Get("pre_filter_cap", c.sgbm.pre_filter_cap);
+    s.Get("mode", c.sgbm.mode);
+    s.RejectUnknownKeys();
+  }
+  {
+    auto s = top.Sub("state");
+    s.Get("dir", c.state_dir);
+    s.RejectUnknownKeys();
+  }
+  {
+    auto s = top.Sub("log");
+    s.Get("level", c.log_level);
+    s.RejectUnknownKeys();
+  }
+  top.RejectUnknownKeys();
+}
+
+}  // namespace
+
+void ServiceConfig::Validate() const {
+  const auto bad = [](const std::string& what) { throw std::invalid_argument(what); };
+  if (listen.empty() || listen.find(':') == std::string::npos) {
+    bad("api.listen must be host:port, got '" + listen + "'");
+  }
+  if (max_message_mb < 4 || max_message_mb > 1024) bad("api.max_message_mb must be 4..1024");
+  if (domain > 232) bad("dds.domain must be 0..232");
+  if (max_image_bytes < 1024) bad("dds.max_image_bytes is too small");
+  if (queue_capacity < 1 || queue_capacity > 1024) bad("ingest.queue_capacity must be 1..1024");
+  if (pair_tolerance_ns < 0 || pair_timeout_ns <= 0) bad("ingest pairing times must be positive");
+  static const std::set<std::string> kModes{"auto", "head", "static", "mobile-base"};
+  if (!kModes.count(mode)) bad("robot.mode must be auto, head, static or mobile-base");
+  if (camera.enabled && (camera.width <= 0 || camera.height <= 0 || camera.fx <= 0 ||
+                         camera.fy <= 0 || camera.baseline_m <= 0)) {
+    bad("robot.camera: width, height, fx, fy and baseline_m must be positive when enabled");
+  }
+  static const std::set<std::string> kLevels{"trace", "debug", "info", "warn", "error"};
+  if (!kLevels.count(log_level)) bad("log.level must be trace, debug, info, warn or error");
+  try {
+    sgbm.Validate();
+  } catch (const std::invalid_argument& e) {
+    bad(std::string("stereo: ") + e.what());
+  }
+  for (const auto* topic : {&topics.left_image, &topics.right_image, &topics.left_info,
+                            &topics.right_info, &topics.joints, &topics.odom}) {
+    if (topic->empty()) bad("dds.topics: a topic name is empty");
+  }
+}
+
+void ApplyYaml(const std::string& yaml_text, ServiceConfig& config) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(yaml_text);
+  } catch (const YAML::Exception& e) {
+    throw std::invalid_argument(std::string("YAML error: ") + e.what());
+  }
+  if (root.IsNull()) return;
+  Apply(root, config);
+}
+
+ServiceConfig LoadServiceConfig(const std::filesystem::path& yaml_path) {
+  std::ifstream in(yaml_path);
+  if (!in) throw std::invalid_argument("cannot open config " + yaml_path.string());
+  std::stringstream text;
+  text << in.rdbuf();
+  ServiceConfig config;
+  try {
+    ApplyYaml(text.str(), config);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(yaml_path.string() + ": " + e.what());
+  }
+  return config;
+}
+
+std::string ToYaml(const ServiceConfig& c) {
+  YAML::Emitter out;
+  out << YAML::BeginMap;
+  out << YAML::Key << "api" << YAML::Value << YAML::BeginMap << YAML::Key << "listen" << YAML::Value
+      << c.listen << YAML::Key << "max_message_mb" << YAML::Value << c.max_message_mb
+      << YAML::EndMap;
+  out << YAML::Key << "dds" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "domain" << YAML::Value << c.domain;
+  out << YAML::Key << "shared_memory_transport" << YAML::Value << c.shared_memory_transport;
+  out << YAML::Key << "max_image_bytes" << YAML::Value << c.max_image_bytes;
+  out << YAML::Key << "topics" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "left_image" << YAML::Value << c.topics.left_image;
+  out << YAML::Key << "right_image" << YAML::Value << c.topics.right_image;
+  out << YAML::Key << "left_camera_info" << YAML::Value << c.topics.left_info;
+  out << YAML::Key << "right_camera_info" << YAML::Value << c.topics.right_info;
+  out << YAML::Key << "joint_states" << YAML::Value << c.topics.joints;
+  out << YAML::Key << "odometry" << YAML::Value << c.topics.odom;
+  out << YAML::Key << "eye_hand_samples" << YAML::Value << c.topics.eye_hand_samples;
+  out << YAML::EndMap << YAML::EndMap;
+  out << YAML::Key << "ingest" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "pair_tolerance_ms" << YAML::Value << c.pair_tolerance_ns / 1e6;
+  out << YAML::Key << "pair_timeout_ms" << YAML::Value << c.pair_timeout_ns / 1e6;
+  out << YAML::Key << "camera_info_wait_ms" << YAML::Value << c.camera_info_wait_ns / 1e6;
+  out << YAML::Key << "joints_max_gap_ms" << YAML::Value << c.joints_max_gap_ns / 1e6;
+  out << YAML::Key << "joints_wait_ms" << YAML::Value << c.joints_wait_ns / 1e6;
+  out << YAML::Key << "queue_capacity" << YAML::Value << c.queue_capacity;
+  out << YAML::EndMap;
+  out << YAML::Key << "robot" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "mode" << YAML::Value << c.mode;
+  out << YAML::Key << "urdf" << YAML::Value << c.urdf;
+  out << YAML::Key << "camera" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "enabled" << YAML::Value << c.camera.enabled;
+  out << YAML::Key << "width" << YAML::Value << c.camera.width;
+  out << YAML::Key << "height" << YAML::Value << c.camera.height;
+  out << YAML::Key << "fx" << YAML::Value << c.camera.fx;
+  out << YAML::Key << "fy" << YAML::Value << c.camera.fy;
+  out << YAML::Key << "cx" << YAML::Value << c.camera.cx;
+  out << YAML::Key << "cy" << YAML::Value << c.camera.cy;
+  out << YAML::Key << "baseline_m" << YAML::Value << c.camera.baseline_m;
+  out << YAML::EndMap << YAML::EndMap;
+  out << YAML::Key << "stereo" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "min_disparity" << YAML::Value << c.sgbm.min_disparity;
+  out << YAML::Key << "num_disparities" << YAML::Value << c.sgbm.num_disparities;
+  out << YAML::Key << "block_size" << YAML::Value << c.sgbm.block_size;
+  out << YAML::Key << "p1" << YAML::Value << c.sgbm.p1;
+  out << YAML::Key << "p2" << YAML::Value << c.sgbm.p2;
+  out << YAML::Key << "uniqueness_ratio" << YAML::Value << c.sgbm.uniqueness_ratio;
+  out << YAML::Key << "speckle_window" << YAML::Value << c.sgbm.speckle_window;
+  out << YAML::Key << "speckle_range" << YAML::Value << c.sgbm.speckle_range;
+  out << YAML::Key << "disp12_max_diff" << YAML::Value << c.sgbm.disp12_max_diff;
+  out << YAML::Key << "pre_filter_cap" << YAML::Value << c.sgbm.pre_filter_cap;
+  out << YAML::Key << "mode" << YAML::Value << c.sgbm.mode;
+  out << YAML::EndMap;
+  out << YAML::Key << "state" << YAML::Value << YAML::BeginMap << YAML::Key << "dir" << YAML::Value
+      << c.state_dir << YAML::EndMap;
+  out << YAML::Key << "log" << YAML::Value << YAML::BeginMap << YAML::Key << "level" << YAML::Value
+      << c.log_level << YAML::EndMap;
+  out << YAML::EndMap;
+  return std::string(out.c_str()) + "\n";
+}
+
+}  // namespace epmap::mapping

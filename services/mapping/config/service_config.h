@@ -1,0 +1,67 @@
+#pragma once
+// epmapd's configuration: every setting with its default, loadable from YAML and overridable
+// by command-line flags. deploy/epmapd.yaml documents every key with its default; a test keeps
+// that file and these defaults in step.
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "common/dds/topics.h"
+#include "perception/stereo/sgbm.h"
+
+namespace epmap::mapping {
+
+// Where the rectification comes from when no CameraInfo has arrived (or when told to ignore it).
+struct ConfiguredCamera {
+  bool enabled = false;     // true: use these values instead of waiting for CameraInfo
+  int width = 0;
+  int height = 0;
+  double fx = 0, fy = 0, cx = 0, cy = 0;
+  double baseline_m = 0;    // the pair is taken as already rectified
+};
+
+struct ServiceConfig {
+  // --- API ---
+  std::string listen = "127.0.0.1:50051";  // gRPC address
+  int max_message_mb = 64;                 // gRPC send/receive limit (a 640x480 map is 1.2 MB)
+
+  // --- DDS ingest ---
+  uint32_t domain = 0;
+  dds::TopicNames topics;
+  bool shared_memory_transport = true;     // 16 MiB segment for same-host publishers
+  uint32_t max_image_bytes = 32u << 20;    // larger samples are refused before decoding
+  int64_t pair_tolerance_ns = 2'000'000;   // left/right stamps closer than this form a pair
+  int64_t pair_timeout_ns = 500'000'000;   // an image without partner for this long is dropped
+  int64_t camera_info_wait_ns = 1'000'000'000;  // how long a frame may wait for CameraInfo
+  int64_t joints_max_gap_ns = 200'000'000; // joint readings must bracket the image this closely
+  int64_t joints_wait_ns = 100'000'000;    // wait this long for a reading after the image stamp
+  size_t queue_capacity = 16;              // frames between ingest and pipeline (~0.5 s at 30 Hz)
+
+  // --- robot ---
+  std::string mode = "auto";               // auto | head | static | mobile-base
+  std::string urdf;                        // kinematic chain (links cam0_optical, cam1_optical)
+  ConfiguredCamera camera;
+
+  // --- stereo ---
+  stereo::SgbmParams sgbm;                 // defaults: ../shared/data README's reference values
+
+  // --- durable state ---
+  std::string state_dir;                   // empty: no durable state (calibration disabled)
+
+  // --- logging ---
+  std::string log_level = "info";          // trace | debug | info | warn | error
+
+  // Throws std::invalid_argument naming the first bad setting.
+  void Validate() const;
+};
+
+// Loads YAML over the defaults; unknown keys are an error (a typo must not pass silently).
+ServiceConfig LoadServiceConfig(const std::filesystem::path& yaml_path);
+// Applies YAML text over `config` (used by LoadServiceConfig and tests).
+void ApplyYaml(const std::string& yaml_text, ServiceConfig& config);
+// The effective configuration as YAML (epmapd --print-config).
+std::string ToYaml(const ServiceConfig& config);
+
+}  // namespace epmap::mapping

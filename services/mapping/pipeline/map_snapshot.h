@@ -1,0 +1,74 @@
+#pragma once
+// What the pipeline knows after one frame, published as an immutable snapshot: the API reads
+// the newest one without ever blocking the pipeline (it swaps a shared_ptr).
+
+#include <Eigen/Geometry>
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <opencv2/core.hpp>
+#include <optional>
+#include <vector>
+
+#include "perception/stereo/rectification.h"
+
+namespace epmap::mapping {
+
+struct MapSnapshot {
+  uint64_t frame_index = 0;  // 1 for the first processed frame
+  int64_t stamp_ns = 0;
+  stereo::RectifiedGeometry camera;
+  int min_disparity = 0;
+  int num_disparities = 0;
+  cv::Mat disparity;       // CV_32FC1 px, NaN unknown (rectified cam0)
+  cv::Mat left_rectified;  // the image the disparity belongs to
+  std::optional<Eigen::Isometry3d> T_base_cam0;  // when a kinematic/odometry pose is known
+  double recomputed_share = 1.0;  // share of pixels whose disparity was computed this frame
+  double valid_share = 0.0;       // share of pixels with a finite disparity
+};
+
+// Holds the newest snapshot; readers may wait for one newer than a stamp or frame.
+class SnapshotStore {
+ public:
+  void Publish(std::shared_ptr<const MapSnapshot> snapshot) {
+    {
+      std::lock_guard lock(mutex_);
+      latest_ = std::move(snapshot);
+    }
+    changed_.notify_all();
+  }
+
+  std::shared_ptr<const MapSnapshot> Latest() const {
+    std::lock_guard lock(mutex_);
+    return latest_;
+  }
+
+  // Waits up to `timeout` for a snapshot whose frame_index is above `after_frame`; returns the
+  // newest one either way (possibly null).
+  std::shared_ptr<const MapSnapshot> WaitNewer(uint64_t after_frame,
+                                               std::chrono::milliseconds timeout) const {
+    std::unique_lock lock(mutex_);
+    changed_.wait_for(lock, timeout, [&] {
+      return closed_ || (latest_ && latest_->frame_index > after_frame);
+    });
+    return latest_;
+  }
+
+  void Close() {
+    {
+      std::lock_guard lock(mutex_);
+      closed_ = true;
+    }
+    changed_.notify_all();
+  }
+
+ private:
+  mutable std::mutex mutex_;
+  mutable std::condition_variable changed_;
+  std::shared_ptr<const MapSnapshot> latest_;
+  bool closed_ = false;
+};
+
+}  // namespace epmap::mapping

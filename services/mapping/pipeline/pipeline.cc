@@ -1,0 +1,201 @@
+#include "services/mapping/pipeline/pipeline.h"
+
+#include <spdlog/spdlog.h>
+
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+
+namespace epmap::mapping {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double MsSince(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+stereo::CameraParameters ToParameters(const dds::CameraCalibration& c) {
+  stereo::CameraParameters p;
+  p.width = c.width;
+  p.height = c.height;
+  p.distortion_model = c.distortion_model;
+  p.d = c.d;
+  p.k = c.k;
+  p.r = c.r;
+  p.p = c.p;
+  return p;
+}
+
+// The configured camera describes an already-rectified pair.
+std::pair<stereo::CameraParameters, stereo::CameraParameters> FromConfig(
+    const ConfiguredCamera& c) {
+  stereo::CameraParameters left;
+  left.width = c.width;
+  left.height = c.height;
+  left.d = {0, 0, 0, 0, 0};
+  left.k = {c.fx, 0, c.cx, 0, c.fy, c.cy, 0, 0, 1};
+  left.p = {c.fx, 0, c.cx, 0, 0, c.fy, c.cy, 0, 0, 0, 1, 0};
+  stereo::CameraParameters right = left;
+  right.p[3] = -c.fx * c.baseline_m;
+  return {left, right};
+}
+
+double ValidShare(const cv::Mat& disparity) {
+  size_t valid = 0;
+  for (int r = 0; r < disparity.rows; ++r) {
+    const float* row = disparity.ptr<float>(r);
+    for (int c = 0; c < disparity.cols; ++c) valid += std::isfinite(row[c]) ? 1 : 0;
+  }
+  return disparity.empty() ? 0.0 : static_cast<double>(valid) / disparity.total();
+}
+
+}  // namespace
+
+Pipeline::Pipeline(const ServiceConfig& config, BoundedQueue<StereoFrame>& queue,
+                   SensorState& sensors, IngestCounters& counters, SnapshotStore& snapshots)
+    : config_(config),
+      queue_(queue),
+      sensors_(sensors),
+      counters_(counters),
+      snapshots_(snapshots),
+      matcher_(config.sgbm) {
+  if (!config.urdf.empty()) {
+    chain_ = kinematics::UrdfChain::FromFile(config.urdf);
+    spdlog::info("kinematic chain from {}: root '{}', joints [{}]", config.urdf,
+                 chain_->root_link(), fmt::join(chain_->joint_names(), ", "));
+  }
+}
+
+Pipeline::~Pipeline() { Stop(); }
+
+void Pipeline::Start() {
+  stop_ = false;
+  thread_ = std::thread([this] { Run(); });
+}
+
+void Pipeline::Stop() {
+  stop_ = true;
+  sensors_.Interrupt();
+  if (thread_.joinable()) thread_.join();
+}
+
+std::string Pipeline::mode() const {
+  if (config_.mode != "auto") return config_.mode;
+  if (chain_) return "head";
+  if (sensors_.has_odometry()) return "mobile-base";
+  return "static";
+}
+
+void Pipeline::Run() {
+  while (!stop_) {
+    auto frame = queue_.Pop(std::chrono::milliseconds(100));
+    if (!frame) continue;
+    try {
+      Process(*frame);
+    } catch (const std::exception& e) {
+      // A frame that breaks an algorithm is counted and skipped; the service keeps running.
+      counters_.rejected.Increment("pipeline:exception");
+      spdlog::warn("frame {} rejected: {}", frame->stamp_ns, e.what());
+    }
+  }
+}
+
+const stereo::Rectifier* Pipeline::CurrentRectifier(const StereoFrame& frame) {
+  if (config_.camera.enabled) {
+    if (!rectifier_) {
+      const auto [l, r] = FromConfig(config_.camera);
+      rectifier_.emplace(l, r);
+    }
+  } else {
+    auto infos = sensors_.camera_infos();
+    if (!infos.left || !infos.right) {
+      // CameraInfo and images travel on different topics: give it a moment to arrive.
+      const auto age = Clock::now() - frame.assembled;
+      const auto wait = std::chrono::nanoseconds(config_.camera_info_wait_ns) - age;
+      if (wait.count() > 0) sensors_.WaitForCameraInfos(wait);
+      infos = sensors_.camera_infos();
+    }
+    if (!infos.left || !infos.right) {
+      counters_.rejected.Increment("pipeline:no_camera_info");
+      return nullptr;
+    }
+    if (infos.version != rectifier_version_) {
+      try {
+        rectifier_.emplace(ToParameters(*infos.left), ToParameters(*infos.right));
+        rectifier_version_ = infos.version;
+        spdlog::info("rectification from CameraInfo: {}x{}, fx {:.2f}, baseline {:.4f} m",
+                     rectifier_->geometry().width, rectifier_->geometry().height,
+                     rectifier_->geometry().fx, rectifier_->geometry().baseline_m);
+      } catch (const std::invalid_argument& e) {
+        rectifier_.reset();
+        rectifier_version_ = infos.version;
+        spdlog::warn("CameraInfo cannot rectify: {}", e.what());
+      }
+    }
+    if (!rectifier_) {
+      counters_.rejected.Increment("pipeline:camera_info_unusable");
+      return nullptr;
+    }
+  }
+  const auto& g = rectifier_->geometry();
+  if (frame.left.cols != g.width || frame.left.rows != g.height) {
+    counters_.rejected.Increment("pipeline:image_size_differs_from_camera_info");
+    return nullptr;
+  }
+  return &*rectifier_;
+}
+
+std::optional<Eigen::Isometry3d> Pipeline::PoseAt(int64_t stamp_ns) {
+  std::string reason;
+  if (chain_) {
+    const auto joints = sensors_.JointsAt(stamp_ns, chain_->joint_names(),
+                                          config_.joints_max_gap_ns,
+                                          std::chrono::nanoseconds(config_.joints_wait_ns), &reason);
+    if (!joints) {
+      events_.Increment("pose_unavailable:" + reason);
+      return std::nullopt;
+    }
+    return chain_->Cam0Pose(*joints);
+  }
+  return std::nullopt;
+}
+
+void Pipeline::Process(StereoFrame& frame) {
+  const auto t_start = Clock::now();
+  const stereo::Rectifier* rectifier = CurrentRectifier(frame);
+  if (!rectifier) return;
+
+  auto t0 = Clock::now();
+  cv::Mat left, right;
+  rectifier->Rectify(frame.left, frame.right, left, right);
+  stage_ms_.Add("rectify", MsSince(t0));
+
+  t0 = Clock::now();
+  const auto pose = PoseAt(frame.stamp_ns);
+  stage_ms_.Add("pose", MsSince(t0));
+
+  t0 = Clock::now();
+  cv::Mat disparity = matcher_.Compute(left, right);
+  stage_ms_.Add("sgbm", MsSince(t0));
+  full_refreshes_++;
+
+  auto snapshot = std::make_shared<MapSnapshot>();
+  snapshot->frame_index = processed_.load() + 1;
+  snapshot->stamp_ns = frame.stamp_ns;
+  snapshot->camera = rectifier->geometry();
+  snapshot->min_disparity = config_.sgbm.min_disparity;
+  snapshot->num_disparities = config_.sgbm.num_disparities;
+  snapshot->valid_share = ValidShare(disparity);
+  snapshot->disparity = std::move(disparity);
+  snapshot->left_rectified = left;
+  snapshot->T_base_cam0 = pose;
+  snapshot->recomputed_share = 1.0;
+  stage_ms_.Add("total", MsSince(t_start));
+  snapshots_.Publish(std::move(snapshot));
+  processed_++;
+  figures_.Add("latency_ms", MsSince(frame.assembled));
+  figures_.Add("recomputed_share", 1.0);
+}
+
+}  // namespace epmap::mapping

@@ -1,0 +1,67 @@
+#include "services/mapping/service.h"
+
+#include <grpcpp/ext/proto_server_reflection_plugin.h>
+#include <grpcpp/health_check_service_interface.h>
+#include <grpcpp/security/server_credentials.h>
+#include <grpcpp/server_builder.h>
+#include <spdlog/spdlog.h>
+
+#include <stdexcept>
+
+#include "services/mapping/api/map_service.h"
+
+namespace epmap::mapping {
+
+MappingService::MappingService(const ServiceConfig& config)
+    : config_(config),
+      started_(std::chrono::steady_clock::now()),
+      queue_(config.queue_capacity),
+      sensors_(counters_.rejected) {
+  config_.Validate();
+  pipeline_ = std::make_unique<Pipeline>(config_, queue_, sensors_, counters_, snapshots_);
+
+  map_service_ = std::make_unique<MapServiceImpl>(*this);
+  grpc::EnableDefaultHealthCheckService(true);
+  grpc::reflection::InitProtoReflectionServerBuilderPlugin();
+  grpc::ServerBuilder builder;
+  int port = 0;
+  builder.AddListeningPort(config_.listen, grpc::InsecureServerCredentials(), &port);
+  builder.SetMaxReceiveMessageSize(config_.max_message_mb << 20);
+  builder.SetMaxSendMessageSize(config_.max_message_mb << 20);
+  builder.RegisterService(map_service_.get());
+  server_ = builder.BuildAndStart();
+  if (!server_ || port == 0) {
+    throw std::runtime_error("cannot serve gRPC on " + config_.listen +
+                             " (address in use or invalid?)");
+  }
+  bound_address_ = config_.listen.substr(0, config_.listen.rfind(':') + 1) + std::to_string(port);
+
+  pipeline_->Start();
+  ingest_ = std::make_unique<DdsIngest>(config_, queue_, sensors_, counters_);
+  server_->GetHealthCheckService()->SetServingStatus(true);
+  spdlog::info("epmapd serving gRPC on {} ; DDS domain {} ; mode {}", bound_address_,
+               config_.domain, config_.mode);
+}
+
+MappingService::~MappingService() { Shutdown(); }
+
+void MappingService::Shutdown() {
+  if (shutting_down_.exchange(true)) return;
+  spdlog::info("epmapd shutting down");
+  if (server_) {
+    server_->GetHealthCheckService()->SetServingStatus(false);
+    snapshots_.Close();  // wakes RPCs waiting for a newer frame
+    server_->Shutdown(std::chrono::system_clock::now() + std::chrono::seconds(2));
+  }
+  ingest_.reset();  // no more DDS callbacks
+  queue_.Close();
+  if (pipeline_) pipeline_->Stop();
+  if (server_) server_->Wait();
+  spdlog::info("epmapd stopped");
+}
+
+double MappingService::uptime_s() const {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - started_).count();
+}
+
+}  // namespace epmap::mapping

@@ -1,0 +1,84 @@
+// Real Fast DDS between two participants in one process: images arrive intact over the
+// image-sized transport, and the guarded type support refuses oversized and undecodable
+// samples with a count instead of handing garbage on.
+
+#include <epmap_dds/ImagePubSubTypes.h>
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <fastdds/dds/topic/TopicDataType.hpp>
+#include <mutex>
+#include <thread>
+
+#include "common/dds/endpoints.h"
+#include "common/dds/ros_conversions.h"
+#include "tests/support/test_env.h"
+
+namespace epmap {
+namespace {
+
+using ImageWriter = dds::Writer<sensor_msgs::msg::Image, sensor_msgs::msg::ImagePubSubType>;
+using ImageReader = dds::Reader<sensor_msgs::msg::Image, sensor_msgs::msg::ImagePubSubType>;
+
+template <class Pred>
+bool WaitFor(Pred pred, std::chrono::milliseconds timeout) {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  while (!pred()) {
+    if (std::chrono::steady_clock::now() > deadline) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  return true;
+}
+
+TEST(DdsRoundTrip, ImagesArriveIntactAndOversizedAreRefused) {
+  const uint32_t domain = testing::UniqueDomainId(7);
+  dds::Participant reader_side(domain, "reader");
+  std::mutex mutex;
+  std::vector<cv::Mat> received;
+  ImageReader reader(
+      reader_side, "rt/test/image",
+      [&](sensor_msgs::msg::Image&& msg) {
+        std::string reason;
+        cv::Mat m = dds::ImageToMat(msg, &reason);
+        std::lock_guard lock(mutex);
+        received.push_back(m);
+      },
+      2'000'000);
+  dds::Participant writer_side(domain, "writer");
+  ImageWriter writer(writer_side, "rt/test/image");
+  ASSERT_TRUE(writer.WaitForReaders(1, std::chrono::seconds(10)));
+  ASSERT_TRUE(WaitFor([&] { return reader.MatchedWriters() > 0; }, std::chrono::seconds(10)));
+
+  cv::Mat image(480, 640, CV_8UC3);
+  cv::randu(image, 0, 255);
+  sensor_msgs::msg::Image msg;
+  dds::MatToImage(image, 1, "cam", &msg);
+  ASSERT_TRUE(writer.Write(msg));
+  ASSERT_TRUE(WaitFor(
+      [&] {
+        std::lock_guard l(mutex);
+        return received.size() == 1;
+      },
+      std::chrono::seconds(10)));
+  EXPECT_EQ(cv::norm(received[0], image, cv::NORM_INF), 0.0);
+
+  cv::Mat big(1200, 1000, CV_8UC3, cv::Scalar(9, 9, 9));  // 3.6 MB > 2 MB limit
+  dds::MatToImage(big, 2, "cam", &msg);
+  ASSERT_TRUE(writer.Write(msg));
+  EXPECT_TRUE(
+      WaitFor([&] { return reader.counters().oversized.load() >= 1; }, std::chrono::seconds(10)));
+  // The refused sample does not block the ones behind it, and is counted once.
+  dds::MatToImage(image, 3, "cam", &msg);
+  ASSERT_TRUE(writer.Write(msg));
+  EXPECT_TRUE(WaitFor(
+      [&] {
+        std::lock_guard l(mutex);
+        return received.size() == 2;
+      },
+      std::chrono::seconds(10)));
+  EXPECT_EQ(reader.counters().oversized.load(), 1u);
+  EXPECT_EQ(reader.counters().received.load(), 2u);
+}
+
+}  // namespace
+}  // namespace epmap
