@@ -102,11 +102,11 @@ class PlanarWorld {
 
   // A rectified grey image of the camera at T_world_cam (optical frame). The camera must be
   // level (optical y straight down, as on a pan unit): then every image column looks along one
-  // horizontal direction, so the walls are intersected once per sub-column. 8x4 samples per
+  // horizontal direction, so the walls are intersected once per sub-column. 8x2 samples per
   // pixel put vertical edges (the ones stereo uses) at an eighth of a pixel.
   cv::Mat Render(const Eigen::Isometry3d& T_world_cam, const stereo::RectifiedGeometry& cam,
                  uint32_t noise_seed) const {
-    constexpr int kSx = 8, kSy = 4;
+    constexpr int kSx = 8, kSy = 2;
     const Eigen::Matrix3d R = T_world_cam.linear();
     if ((R.col(1) - Eigen::Vector3d(0, 0, -1)).norm() > 1e-9) {
       throw std::invalid_argument("PlanarWorld::Render: the camera must be level");

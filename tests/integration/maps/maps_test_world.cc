@@ -1,7 +1,7 @@
 // maps-test-world --world room|building --out DIR [--reverse]: writes a synthetic mobile-base
 // run (tests/support/planar_world.h) in the dataset layout, for the maps integration test and
-// for trying `epmap-bench maps` before a full simulator is at hand. "building" is a ring
-// corridor of about 60 m inside a 28 m x 28.5 m floor with rooms around it.
+// for trying `epmap-bench maps` before a full simulator is at hand. "building" is a 28 m x
+// 28.5 m floor (a corridor, five rooms, furniture) and a loop of about 65 m through it.
 
 #include <CLI/CLI.hpp>
 #include <iostream>
@@ -12,41 +12,47 @@ namespace {
 
 using epmap::testing::Wall;
 
+// The whole building is shifted off the 10 cm lattice of the grid (walls at round numbers
+// would all lie on cell boundaries, a case real walls rarely line up with).
+const Eigen::Vector2d kBuildingShift(0.037, 0.043);
+
 std::vector<Wall> BuildingWalls() {
   std::vector<Wall> w;
   const auto add = [&](double x1, double y1, double x2, double y2, double h = 2.4) {
-    w.push_back({{x1, y1}, {x2, y2}, h});
+    w.push_back(
+        {Eigen::Vector2d(x1, y1) + kBuildingShift, Eigen::Vector2d(x2, y2) + kBuildingShift, h});
   };
-  // Outer shell 28 x 28.5.
+  // Shell 28 x 28.5.
   add(0, 0, 28, 0);
   add(28, 0, 28, 28.5);
   add(28, 28.5, 0, 28.5);
   add(0, 28.5, 0, 0);
-  // Outer corridor walls (5,5)-(23,21) with door gaps.
-  add(5, 5, 11, 5);
-  add(12, 5, 23, 5);
-  add(23, 5, 23, 12);
-  add(23, 13, 23, 21);
-  add(23, 21, 16, 21);
-  add(15, 21, 5, 21);
-  add(5, 21, 5, 15);
-  add(5, 14, 5, 5);
-  // Inner block (7,7)-(21,19), split into two rooms, doors to the corridor.
-  add(7, 7, 13, 7);
-  add(14, 7, 21, 7);
-  add(21, 7, 21, 19);
-  add(21, 19, 9, 19);
-  add(8, 19, 7, 19);
-  add(7, 19, 7, 7);
-  add(14, 7, 14, 19);
-  // Room partitions between the corridor and the shell.
-  add(0, 14, 5, 14);
-  add(23, 10, 28, 10);
-  add(11, 21, 11, 28.5);
-  add(18, 0, 18, 5);
-  // Low furniture in the corridor's wide corners (a cabinet and a bench).
-  add(21.6, 5.4, 22.6, 5.4, 0.9);
-  add(5.4, 20.6, 6.4, 20.6, 0.5);
+  // East-west corridor, y in [12.5, 15], doors into the rooms on both sides.
+  add(0, 12.5, 5, 12.5);
+  add(6, 12.5, 13, 12.5);
+  add(14, 12.5, 17, 12.5);
+  add(18, 12.5, 23, 12.5);
+  add(24, 12.5, 28, 12.5);
+  add(0, 15, 7, 15);
+  add(8, 15, 20, 15);
+  add(21, 15, 25, 15);
+  add(26, 15, 28, 15);
+  // Rooms south (x < 9, 9..19, > 19) and north (x < 14, > 14).
+  add(9, 0, 9, 12.5);
+  add(19, 0, 19, 12.5);
+  add(14, 15, 14, 28.5);
+  // Furniture: tables (0.75 m) and a cabinet (1.8 m) as boxes, a low bench in the corridor.
+  const auto box = [&](double x, double y, double sx, double sy, double h) {
+    add(x, y, x + sx, y, h);
+    add(x + sx, y, x + sx, y + sy, h);
+    add(x + sx, y + sy, x, y + sy, h);
+    add(x, y + sy, x, y, h);
+  };
+  box(15.2, 3.0, 1.6, 0.8, 0.75);
+  box(11.0, 9.5, 0.6, 1.4, 1.8);
+  box(23.0, 20.5, 1.2, 1.2, 0.75);
+  box(26.8, 16.0, 0.6, 2.0, 1.8);
+  add(9.5, 14.6, 11.0, 14.6, 0.45);
   return w;
 }
 
@@ -65,12 +71,17 @@ int Main(int argc, char** argv) {
     waypoints = {{1.2, 1.2}, {6.8, 1.2}, {6.8, 4.8}, {1.2, 4.8}, {1.2, 2.5}};
   } else if (world == "building") {
     walls = BuildingWalls();
-    waypoints = {{6, 13}, {6, 6}, {22, 6}, {22, 20}, {6, 20}, {6, 13.5}};
+    // A loop of about 65 m: east along the corridor, through the middle south room (in by one
+    // door, out by the other), into the east north room and out, back west along the corridor.
+    waypoints = {{4, 13.8},    {13.5, 13.8}, {13.5, 8},  {17.5, 8},    {17.5, 13.8},
+                 {20.5, 13.8}, {20.5, 19},   {25.5, 19}, {25.5, 13.8}, {4.5, 13.8}};
+    for (auto& p : waypoints) p += kBuildingShift;
   } else {
     std::cerr << "unknown world '" << world << "'\n";
     return 2;
   }
   if (reverse) {
+    // The same loop the other way round, from the same start and end (paper 003's protocol).
     std::reverse(waypoints.begin() + 1, waypoints.end() - 1);
   }
   const Eigen::Vector2d d = waypoints[1] - waypoints[0];
