@@ -611,6 +611,10 @@ int RunCommand(int argc, char** argv) {
     }
     WriteText(fs::path(out_dir) / "pmap.svg", Svg(maps.perceptual, truth, true_path));
     cv::imwrite((fs::path(out_dir) / "grid.png").string(), GridPicture(grid_export, truth, poses));
+    if (!truth.walls.empty()) {
+      cv::imwrite((fs::path(out_dir) / "grid_errors.png").string(),
+                  epmap::mobile_mapping::GridErrorPicture(grid_export, truth.walls));
+    }
     cv::imwrite((fs::path(out_dir) / "pmap.png").string(),
                 PmapPicture(maps.perceptual, truth, true_path));
 
@@ -634,7 +638,8 @@ int RunCommand(int argc, char** argv) {
                        [](const auto& v) { return v.in_map; })
       << ",\"visual_heading\":" << c.visual_heading
       << ",\"odometry_heading\":" << c.odometry_heading << ",\"registrations\":" << c.registrations
-      << ",\"shifts_applied\":" << c.shifts_applied << ",\"rejected_by_reason\":{";
+      << ",\"shifts_applied\":" << c.shifts_applied << ",\"shifts_refused\":" << c.shifts_refused
+      << ",\"rejected_by_reason\":{";
     bool first = true;
     for (const auto& [reason, n] : c.rejected_by_reason) {
       j << (first ? "" : ",") << "\"" << reason << "\":" << n;

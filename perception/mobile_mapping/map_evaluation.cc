@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <opencv2/imgproc.hpp>
 
 #include "perception/perceptual_map/boundary.h"
 
@@ -113,11 +114,9 @@ double CoveredVisibleShare(const std::vector<Segment2>& reference,
   return total > 0 ? covered / total : 0.0;
 }
 
-GridScore ScoreGrid(const occupancy::GridExport& g, const std::vector<Segment2>& walls,
-                    uint8_t occupied_threshold) {
-  GridScore score;
+std::vector<uint8_t> RasteriseWalls(const occupancy::GridExport& g,
+                                    const std::vector<Segment2>& walls) {
   const size_t n = static_cast<size_t>(g.width) * g.height;
-  if (n == 0 || g.occupancy.size() != n) return score;
   // Supercover rasterisation: every cell whose closed square the wall touches (a wall along
   // a cell boundary marks the cells on both sides, as either could hold its surface).
   std::vector<uint8_t> wall(n, 0);
@@ -141,6 +140,15 @@ GridScore ScoreGrid(const occupancy::GridExport& g, const std::vector<Segment2>&
       }
     }
   }
+  return wall;
+}
+
+GridScore ScoreGrid(const occupancy::GridExport& g, const std::vector<Segment2>& walls,
+                    uint8_t occupied_threshold) {
+  GridScore score;
+  const size_t n = static_cast<size_t>(g.width) * g.height;
+  if (n == 0 || g.occupancy.size() != n) return score;
+  const std::vector<uint8_t> wall = RasteriseWalls(g, walls);
   size_t uni = 0, uni_obs = 0;
   for (size_t i = 0; i < n; ++i) {
     const bool known = g.occupancy[i] != occupancy::GridExport::kUnknown;
@@ -156,6 +164,36 @@ GridScore ScoreGrid(const occupancy::GridExport& g, const std::vector<Segment2>&
   score.iou_observed =
       uni_obs ? static_cast<double>(score.intersection) / static_cast<double>(uni_obs) : 0.0;
   return score;
+}
+
+}  // namespace epmap::mobile_mapping
+
+namespace epmap::mobile_mapping {
+
+cv::Mat GridErrorPicture(const occupancy::GridExport& g, const std::vector<Segment2>& walls,
+                         uint8_t occupied_threshold, int scale) {
+  const size_t n = static_cast<size_t>(g.width) * g.height;
+  cv::Mat img(static_cast<int>(g.height), static_cast<int>(g.width), CV_8UC3);
+  if (n == 0 || g.occupancy.size() != n) return img;
+  const std::vector<uint8_t> wall = RasteriseWalls(g, walls);
+  for (uint32_t r = 0; r < g.height; ++r) {
+    auto* row = img.ptr<cv::Vec3b>(static_cast<int>(g.height - 1 - r));
+    for (uint32_t c = 0; c < g.width; ++c) {
+      const size_t i = static_cast<size_t>(r) * g.width + c;
+      const bool known = g.occupancy[i] != occupancy::GridExport::kUnknown;
+      const bool occ = known && g.occupancy[i] >= occupied_threshold;
+      cv::Vec3b colour = known ? cv::Vec3b(255, 255, 255) : cv::Vec3b(160, 160, 160);
+      if (occ && wall[i]) colour = cv::Vec3b(0, 170, 0);   // true positive: green
+      if (occ && !wall[i]) colour = cv::Vec3b(0, 0, 230);  // false positive: red
+      if (!occ && wall[i]) {
+        colour = known ? cv::Vec3b(230, 90, 0) : cv::Vec3b(240, 200, 150);  // missed: blue
+      }
+      row[c] = colour;
+    }
+  }
+  cv::Mat big;
+  cv::resize(img, big, cv::Size(), scale, scale, cv::INTER_NEAREST);
+  return big;
 }
 
 }  // namespace epmap::mobile_mapping

@@ -5,6 +5,7 @@
 #include <Eigen/Core>
 #include <cstddef>
 #include <cstdint>
+#include <opencv2/core.hpp>
 #include <vector>
 
 #include "perception/occupancy/layered_grid.h"
@@ -43,6 +44,17 @@ struct GridScore {
 // Rasterises the walls at the grid's resolution and lattice (every cell the wall line touches)
 // and compares them with the cells
 // whose occupancy is at or above occupied_threshold (0..100; map_server's 0.65 -> 65).
+// The walls rasterised on the grid's lattice: 1 for every cell a wall line touches (a wall along
+// a cell boundary marks the cells on both sides), row-major like the grid's bytes.
+std::vector<uint8_t> RasteriseWalls(const occupancy::GridExport& grid,
+                                    const std::vector<Segment2>& walls);
+
+// A picture of ScoreGrid's comparison (y up, `scale` px per cell): green = occupied and wall,
+// red = occupied but no wall, blue = wall seen but not occupied, light blue = wall never seen,
+// white = free, grey = unknown.
+cv::Mat GridErrorPicture(const occupancy::GridExport& grid, const std::vector<Segment2>& walls,
+                         uint8_t occupied_threshold = 65, int scale = 4);
+
 GridScore ScoreGrid(const occupancy::GridExport& grid, const std::vector<Segment2>& walls,
                     uint8_t occupied_threshold = 65);
 

@@ -243,15 +243,30 @@ void MobileMapper::CloseGroup(KeyFrameReport* report) {
   if (!grid_.empty() && params_.map_correlation) {
     const auto reg = occupancy::CorrelateMaps(local, grid_, params_.correlation_search_m);
     ++counters_.registrations;
-    const bool better = reg.score > reg.zero_score * (1.0 + params_.correlation_min_gain);
-    if (reg.local_cells >= params_.correlation_min_cells && better &&
-        (reg.dx_cells != 0 || reg.dy_cells != 0)) {
-      sx = reg.dx_cells;
-      sy = reg.dy_cells;
-      report->shifted = true;
-      report->shift_m = Eigen::Vector2d(reg.dx_m, reg.dy_m);
-      poses_.ApplyTranslation(report->shift_m, group_.first_record);
-      ++counters_.shifts_applied;
+    const int border =
+        static_cast<int>(std::ceil(params_.correlation_search_m / grid_.resolution()));
+    const bool on_border = std::abs(reg.dx_cells) >= border || std::abs(reg.dy_cells) >= border;
+    if (reg.local_cells >= params_.correlation_min_cells && !on_border) {
+      // Along each axis, the shift counts only if the peak is sharp there (a corridor leaves
+      // the position along it free); whole-cell moves must also clearly beat no shift.
+      const bool sharp_x = reg.sharpness_x >= params_.correlation_min_sharpness;
+      const bool sharp_y = reg.sharpness_y >= params_.correlation_min_sharpness;
+      const bool gain = reg.score > reg.zero_score * (1.0 + params_.correlation_min_gain);
+      const bool take_x = sharp_x && (reg.dx_cells == 0 || gain);
+      const bool take_y = sharp_y && (reg.dy_cells == 0 || gain);
+      const Eigen::Vector2d shift(take_x ? reg.dx_m : 0.0, take_y ? reg.dy_m : 0.0);
+      if (shift.norm() > params_.correlation_max_shift_m) {
+        ++counters_.shifts_refused;  // far more than odometry drifts between two stops
+      } else if (shift.norm() >= params_.correlation_min_shift_m) {
+        sx = take_x ? reg.dx_cells : 0;
+        sy = take_y ? reg.dy_cells : 0;
+        report->shifted = true;
+        report->shift_m = shift;
+        poses_.ApplyTranslation(shift, group_.first_record);
+        ++counters_.shifts_applied;
+      }
+    } else if (on_border) {
+      ++counters_.shifts_refused;  // the peak is at the edge of the search: no peak at all
     }
   }
   grid_.MergeWeighted(local, sx, sy);

@@ -82,6 +82,14 @@ struct MobileMapperParams {
   // (a flat correlation, e.g. along a corridor, must not move the robot).
   double correlation_min_gain = 0.05;
   size_t correlation_min_cells = 30;  // local maps with less structure are merged unshifted
+  // The sub-cell part of the shift (parabola through the peak) is applied along an axis whose
+  // peak is at least this sharp (see occupancy::Registration): odometry drifts by centimetres
+  // between stops, less than a cell, and whole-cell shifts alone would never catch it.
+  double correlation_min_sharpness = 0.05;
+  double correlation_min_shift_m = 0.005;  // smaller corrections are noise
+  // A larger correction at one stop is refused: odometry does not drift that much between two
+  // stops, so such a peak is an alias (a repeated structure, a wall seen from its far end).
+  double correlation_max_shift_m = 0.25;
 
   // Groups of fewer key frames are not views (2+: only panning stops make views; 1: every
   // key frame where the base stands is a view, for a robot that never stops to pan).
@@ -129,6 +137,7 @@ struct MapperCounters {
   uint64_t odometry_heading = 0;  // moved, but the visual estimate failed or was refused
   uint64_t registrations = 0;     // local maps correlated with the global one
   uint64_t shifts_applied = 0;
+  uint64_t shifts_refused = 0;  // peak on the search border or implausibly far
 };
 
 // What readers get: immutable once built.

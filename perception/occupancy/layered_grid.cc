@@ -150,7 +150,7 @@ bool LayeredGrid::AddPoint(const Eigen::Vector3d& origin, const Eigen::Vector3d&
   if (range > mp.max_range_m || horizontal < 1e-6) return false;
   const double res = params_.resolution_m;
   const double sigma = std::max(range_sigma_m, 1e-6);
-  const double weight = std::min(1.0, res / sigma);  // a vague point counts less
+  const double weight = std::min(1.0, std::pow(res / sigma, mp.weight_exponent));
   const double gap = std::max(mp.empty_gap_sigmas * sigma, res);
 
   const int64_t ex = CellX(p.x()), ey = CellY(p.y());
@@ -411,11 +411,18 @@ Registration CorrelateMaps(const LayeredGrid& local, const LayeredGrid& global,
     return denom < 0 ? std::clamp(0.5 * (lo - hi) / denom, -0.5, 0.5) : 0.0;
   };
   double fx = 0, fy = 0;
+  const auto sharp = [&](double lo, double hi) {
+    return reg.score > 0 ? (2 * reg.score - lo - hi) / reg.score : 0.0;
+  };
   if (std::abs(reg.dx_cells) < S) {
-    fx = refine(at(reg.dx_cells - 1, reg.dy_cells), reg.score, at(reg.dx_cells + 1, reg.dy_cells));
+    const double lo = at(reg.dx_cells - 1, reg.dy_cells), hi = at(reg.dx_cells + 1, reg.dy_cells);
+    fx = refine(lo, reg.score, hi);
+    reg.sharpness_x = sharp(lo, hi);
   }
   if (std::abs(reg.dy_cells) < S) {
-    fy = refine(at(reg.dx_cells, reg.dy_cells - 1), reg.score, at(reg.dx_cells, reg.dy_cells + 1));
+    const double lo = at(reg.dx_cells, reg.dy_cells - 1), hi = at(reg.dx_cells, reg.dy_cells + 1);
+    fy = refine(lo, reg.score, hi);
+    reg.sharpness_y = sharp(lo, hi);
   }
   reg.dx_m = (reg.dx_cells + fx) * local.resolution();
   reg.dy_m = (reg.dy_cells + fy) * local.resolution();

@@ -38,10 +38,12 @@ struct MeasurementParams {
   // The ray stops giving empty evidence this many range sigmas before the point (at least one
   // cell), so the point's own uncertainty never clears it.
   double empty_gap_sigmas = 2.0;
+  // Range weight w = min(1, (resolution / sigma)^weight_exponent).
+  double weight_exponent = 1.0;
   // Farther points are ignored: at 8 m a stereo point of this rig is uncertain by more than
   // half a metre (z^2 sigma_d / f b), too vague for a 10 cm grid, and its ray would clear
   // walls it passes by.
-  double max_range_m = 8.0;
+  double max_range_m = 5.0;
   void Validate() const;
 };
 
@@ -152,7 +154,10 @@ struct Registration {
   double dx_m = 0, dy_m = 0;       // the same, refined to sub-cell by a parabola through the peak
   double score = 0;                // correlation at the best shift
   double zero_score = 0;           // correlation with no shift
-  size_t local_cells = 0;          // cells of the local synthetic map with a non-zero value
+  // How sharp the peak is along each axis, (2 C(0) - C(-1) - C(+1)) / C(0) around the best
+  // shift: near 0 along a corridor (nothing fixes the position along it), up to 2 for a spike.
+  double sharpness_x = 0, sharpness_y = 0;
+  size_t local_cells = 0;  // cells of the local synthetic map with a non-zero value
 };
 
 // Correlation C(dx, dy) = sum_c M_local(c) M_global(c + (dx, dy)) over shifts within

@@ -27,7 +27,7 @@ struct PerceptualMapParams {
   double track_max_distance_m = 0.3;
   double track_max_angle_rad = 0.35;  // 20 degrees
   // II step iii / III-C: the "pre-specified minimum number" of tracked reference objects.
-  int min_tracked = 8;
+  int min_tracked = 12;
   // III-C: the nearest common object is the anchor; among those nearby, prefer one whose
   // length in the view and in the global map agree to this ratio (same extent seen, so its end
   // point is the same physical point).

@@ -13,6 +13,9 @@ void ClusteringParams::Validate() const {
   if (min_points < 2) throw std::invalid_argument("clustering: min_points must be >= 2");
   if (!(min_length_m >= 0)) throw std::invalid_argument("clustering: min_length_m must be >= 0");
   if (!(max_rms_m > 0)) throw std::invalid_argument("clustering: max_rms_m must be > 0");
+  if (!(radial_max_angle_rad >= 0) || !(radial_min_range_m >= 0)) {
+    throw std::invalid_argument("clustering: radial filter values must be >= 0");
+  }
 }
 
 bool FitLine(const std::vector<Eigen::Vector2d>& points, ReferenceObject* out) {
@@ -72,6 +75,12 @@ std::vector<ReferenceObject> FitReferenceObjects(const std::vector<Eigen::Vector
     ReferenceObject o;
     if (!FitLine(group, &o)) continue;
     if (o.length() < params.min_length_m || o.rms_m > params.max_rms_m) continue;
+    const Eigen::Vector2d mid = o.mid();
+    if (params.radial_max_angle_rad > 0 && mid.norm() > params.radial_min_range_m &&
+        o.length() > 0) {
+      const double c = std::abs(mid.normalized().dot((o.b - o.a).normalized()));
+      if (c > std::cos(params.radial_max_angle_rad)) continue;  // along the line of sight
+    }
     objects.push_back(o);
   }
   return objects;

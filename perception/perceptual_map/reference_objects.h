@@ -41,6 +41,12 @@ struct ClusteringParams {
   int min_points = 6;          // fewer points in a cell make no reference object
   double min_length_m = 0.05;  // paper 003: reference objects shorter than 5 cm are removed
   double max_rms_m = 0.10;     // a cell whose points do not lie on a line (clutter) is dropped
+  // Far away, stereo depth noise (growing with the square of the range) stretches a wall's
+  // points along the line of sight; a cell then fits a line pointing at the robot. Objects
+  // farther than radial_min_range_m whose line is within radial_max_angle_rad of the line of
+  // sight from the view's origin are dropped (0 disables).
+  double radial_max_angle_rad = 0.35;  // 20 degrees
+  double radial_min_range_m = 4.0;
   void Validate() const;
 };
 

@@ -96,13 +96,14 @@ TEST(LayeredGrid, AQueryForALayerThatDoesNotExistIsAClearErrorAndChangesNothing)
 }
 
 TEST(LayeredGrid, GrowsAndKeepsWhatItHad) {
-  LayeredGrid g;
+  LayeredGrid g(occupancy::GridParams{0.1, {0.10, 0.70, 1.30, 2.00}, 1.0});  // 1 m margin
   g.AddPoint({0.05, 0.05, 1.0}, {1.05, 0.05, 1.0}, 0.01, {});
   const auto cell = g.At(1, 10, 0);
-  g.AddPoint({0.05, 0.05, 1.0}, {-5.05, 4.05, 1.0}, 0.01, {});
+  EXPECT_GT(g.origin().x(), -3.0);
+  g.AddPoint({0.05, 0.05, 1.0}, {-3.05, 3.05, 1.0}, 0.01, {});
   EXPECT_FLOAT_EQ(g.At(1, 10, 0).occupied, cell.occupied);
-  EXPECT_LE(g.origin().x(), -5.1);
-  EXPECT_GT(g.At(1, -51, 40).occupied, 0.0F);
+  EXPECT_LE(g.origin().x(), -3.1);
+  EXPECT_GT(g.At(1, -31, 30).occupied, 0.0F);
   // Copies are deep: changing the original leaves the copy as it was.
   const LayeredGrid copy = g;
   g.AddPoint({0.05, 0.05, 1.0}, {1.05, 0.05, 1.0}, 0.01, {});
@@ -148,6 +149,23 @@ TEST(Correlation, RecoversAKnownShift) {
   EXPECT_LE(std::abs(narrow.dx_cells), 1);
   LayeredGrid coarse(occupancy::GridParams{0.2, {0.1, 1.0}, 1.0});
   EXPECT_THROW(occupancy::CorrelateMaps(coarse, global, 0.5), std::invalid_argument);
+}
+
+TEST(Correlation, ACorridorFixesOnlyTheAxisAcrossIt) {
+  // Two long parallel walls along x: the correlation peak is sharp across (y), flat along (x).
+  const auto corridor = [](double dx) {
+    LayeredGrid g;
+    for (double x = 0.05; x < 12; x += 0.02) {
+      for (double y : {-0.95, 1.05}) {
+        g.AddPoint({6.05 + dx, 0.05, 1.0}, {x + dx, y, 1.0}, 0.02, occupancy::MeasurementParams{});
+      }
+    }
+    return g;
+  };
+  const auto reg = occupancy::CorrelateMaps(corridor(0.2), corridor(0.0), 0.5);
+  EXPECT_GT(reg.sharpness_y, 0.5);
+  EXPECT_LT(reg.sharpness_x, 0.05);
+  EXPECT_EQ(reg.dy_cells, 0);
 }
 
 TEST(Merge, WeightedAveragingByConfidence) {

@@ -55,6 +55,22 @@ TEST(ReferenceObjects, GridClusteringMakesOneLinePerCellAndDropsShortOnes) {
   EXPECT_EQ(perceptual_map::FitReferenceObjects(pts, T, p).size(), 5u);
 }
 
+TEST(ReferenceObjects, FarLinesAlongTheLineOfSightAreDepthNoise) {
+  // Points spread along the line of sight (as stereo depth noise spreads a far wall's points):
+  // dropped beyond 4 m, kept near (where a line of sight along a wall is a real wall).
+  std::vector<Eigen::Vector2d> far, near;
+  for (int i = 0; i < 20; ++i) {
+    far.emplace_back(6.05 + 0.02 * i, 1.05 + 0.003 * i);
+    near.emplace_back(2.05 + 0.02 * i, 0.55 + 0.003 * i);
+  }
+  const auto id = Eigen::Isometry2d::Identity();
+  EXPECT_TRUE(perceptual_map::FitReferenceObjects(far, id, {}).empty());
+  EXPECT_EQ(perceptual_map::FitReferenceObjects(near, id, {}).size(), 1u);
+  perceptual_map::ClusteringParams off;
+  off.radial_max_angle_rad = 0;
+  EXPECT_EQ(perceptual_map::FitReferenceObjects(far, id, off).size(), 1u);
+}
+
 TEST(ReferenceObjects, CellsWithoutALineAreDropped) {
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> u(0.0, 0.49);
