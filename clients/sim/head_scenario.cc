@@ -28,6 +28,7 @@ constexpr double kEncoderNoiseDeg = 0.02;
 constexpr double kEncoderStepDeg = 0.01;
 // vergence: the eye encoders' zero differs from the truth (reading = true + bias).
 constexpr double kLeftPanBiasDeg = 0.40, kRightPanBiasDeg = -0.35, kTiltBiasDeg = 0.15;
+constexpr double kNominalVergenceDeg = 4.5;  // fixation at ~0.87 m
 
 // Joint order of icub_head.urdf (and of joints0/).
 enum Joint { kNeckPitch, kNeckRoll, kNeckYaw, kEyesTilt, kLeftPan, kRightPan, kJoints };
@@ -79,8 +80,14 @@ class HeadScenario final : public Scenario {
   int frame_count() const override { return frames_; }
   double rate_hz() const override { return kRateHz; }
   bool rectified() const override { return !vergence_; }
-  dataset::CameraSensor cam0() const override { return Sensor(nominal_chain_.Cam0Pose(Zeros())); }
-  dataset::CameraSensor cam1() const override { return Sensor(nominal_chain_.Cam1Pose(Zeros())); }
+  // T_BS: head with every joint at zero; in `vergence` the eyes at the nominal 4.5 degree
+  // vergence, so that the sensor files describe a verging (unrectified) rig.
+  dataset::CameraSensor cam0() const override {
+    return Sensor(nominal_chain_.Cam0Pose(NominalJoints()));
+  }
+  dataset::CameraSensor cam1() const override {
+    return Sensor(nominal_chain_.Cam1Pose(NominalJoints()));
+  }
   std::string urdf() const override { return IcubHeadUrdf(); }
   std::string true_urdf() const override { return true_urdf_; }
   std::vector<std::string> joint_names() const override { return kJointNames; }
@@ -91,7 +98,7 @@ class HeadScenario final : public Scenario {
     return 16 * static_cast<int>(std::ceil(camera_.fx * kBaselineM / 0.38 / 16));
   }
 
-  SimFrame Render(int index) const override {
+  SimFrame RenderFrame(int index, bool ground_truth) const override {
     CheckIndex(index);
     const double t = index / kRateHz;
     SimFrame f;
@@ -113,6 +120,7 @@ class HeadScenario final : public Scenario {
     shot.sensor.noise_sigma = options().noise ? 2.0 : 0.0;
     shot.seed = options().seed;
     shot.index = index;
+    shot.ground_truth = ground_truth;
     shot.rectified = !vergence_;
     // The true rig is rectified by construction; take its baseline from the chain itself.
     shot.baseline = (shot.T_world_cam0.inverse() * shot.T_world_cam1).translation().x();
@@ -127,7 +135,14 @@ class HeadScenario final : public Scenario {
   }
 
  private:
-  static std::vector<double> Zeros() { return std::vector<double>(kJoints, 0.0); }
+  std::vector<double> NominalJoints() const {
+    std::vector<double> q(kJoints, 0.0);
+    if (vergence_) {
+      q[kLeftPan] = kNominalVergenceDeg / 2 * kDeg;
+      q[kRightPan] = -kNominalVergenceDeg / 2 * kDeg;
+    }
+    return q;
+  }
 
   dataset::CameraSensor Sensor(const Eigen::Isometry3d& T_base_cam) const {
     dataset::CameraSensor s;
@@ -156,7 +171,7 @@ class HeadScenario final : public Scenario {
       q[kNeckYaw] = yaw_(t);
       q[kEyesTilt] = -4 * kDeg + tilt_(t);
       const double version = version_(t);
-      const double vergence = 4.5 * kDeg + vergence_signal_(t);  // 2 to 7 degrees
+      const double vergence = kNominalVergenceDeg * kDeg + vergence_signal_(t);  // 2 to 7 deg
       q[kLeftPan] = version + vergence / 2;
       q[kRightPan] = version - vergence / 2;
     }

@@ -74,14 +74,16 @@ int Record(const CommonFlags& flags, const std::string& out, bool force) {
   }
   const auto scenario = epmap::sim::MakeScenario(flags.Options());
   std::cerr << "epmap-sim: recording " << scenario->Describe() << " into " << out << "\n";
-  int last_percent = -1;
+  int last_tenth = -1;
   epmap::sim::Record(*scenario, out, force, [&](int done, int total) {
-    const int percent = 100 * done / total;
-    if (percent / 10 != last_percent / 10) {
+    if (scenario->frame_count() == 0) return;
+    const int tenth = 10 * done / total;
+    if (tenth != last_tenth) {
       std::cerr << "  " << done << "/" << total << " frames\n";
-      last_percent = percent;
+      last_tenth = tenth;
     }
   });
+  std::cerr << "epmap-sim: done: " << out << "\n";
   return 0;
 }
 

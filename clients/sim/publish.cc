@@ -7,7 +7,6 @@
 #include <epmap_dds/OdometryPubSubTypes.h>
 
 #include <condition_variable>
-#include <deque>
 #include <map>
 #include <mutex>
 #include <stdexcept>
@@ -46,42 +45,73 @@ dds::CameraCalibration Calibration(const dataset::CameraSensor& cam, double tx) 
   return c;
 }
 
-// A bounded queue of rendered frames between the render thread and the sender.
-class FrameQueue {
+// Frames rendered ahead by a few worker threads, handed to the sender in index order. A worker
+// waits while it is more than `ahead` frames in front of the sender.
+class RenderAhead {
  public:
-  explicit FrameQueue(size_t capacity) : capacity_(capacity) {}
-  // Blocks while full; returns false if closed.
-  bool Push(SimFrame frame) {
-    std::unique_lock lock(mutex_);
-    space_.wait(lock, [&] { return closed_ || queue_.size() < capacity_; });
-    if (closed_) return false;
-    queue_.push_back(std::move(frame));
-    ready_.notify_one();
-    return true;
+  RenderAhead(const Scenario& scenario, int workers, int ahead)
+      : scenario_(scenario), ahead_(ahead), total_(scenario.frame_count()) {
+    for (int w = 0; w < workers; ++w) threads_.emplace_back([this] { Work(); });
   }
-  // Blocks until a frame is there; nullopt once closed and drained.
-  std::optional<SimFrame> Pop() {
+  ~RenderAhead() { Stop(); }
+
+  // The next frame in order; nullopt after the last one (or once stopped). Rethrows a
+  // rendering error.
+  std::optional<SimFrame> Next() {
     std::unique_lock lock(mutex_);
-    ready_.wait(lock, [&] { return closed_ || !queue_.empty(); });
-    if (queue_.empty()) return std::nullopt;
-    SimFrame f = std::move(queue_.front());
-    queue_.pop_front();
-    space_.notify_one();
+    ready_.wait(lock, [&] { return stopped_ || error_ || done_.count(next_) || next_ >= total_; });
+    if (error_) std::rethrow_exception(error_);
+    if (stopped_ || next_ >= total_) return std::nullopt;
+    SimFrame f = std::move(done_.at(next_));
+    done_.erase(next_++);
+    space_.notify_all();
     return f;
   }
-  void Close() {
-    std::lock_guard lock(mutex_);
-    closed_ = true;
+
+  void Stop() {
+    {
+      std::lock_guard lock(mutex_);
+      stopped_ = true;
+    }
     ready_.notify_all();
     space_.notify_all();
+    for (auto& t : threads_) {
+      if (t.joinable()) t.join();
+    }
   }
 
  private:
-  size_t capacity_;
+  void Work() {
+    while (true) {
+      int index;
+      {
+        std::unique_lock lock(mutex_);
+        space_.wait(lock,
+                    [&] { return stopped_ || claimed_ >= total_ || claimed_ < next_ + ahead_; });
+        if (stopped_ || claimed_ >= total_) return;
+        index = claimed_++;
+      }
+      try {
+        SimFrame f = scenario_.RenderSensors(index);
+        std::lock_guard lock(mutex_);
+        done_.emplace(index, std::move(f));
+      } catch (...) {
+        std::lock_guard lock(mutex_);
+        error_ = std::current_exception();
+      }
+      ready_.notify_all();
+    }
+  }
+
+  const Scenario& scenario_;
+  const int ahead_, total_;
   std::mutex mutex_;
   std::condition_variable ready_, space_;
-  std::deque<SimFrame> queue_;
-  bool closed_ = false;
+  std::map<int, SimFrame> done_;
+  int next_ = 0, claimed_ = 0;
+  bool stopped_ = false;
+  std::exception_ptr error_;
+  std::vector<std::thread> threads_;
 };
 
 PublishReport PublishEyeHand(const Scenario& scenario, const PublishOptions& o) {
@@ -137,6 +167,7 @@ PublishReport PublishEyeHand(const Scenario& scenario, const PublishOptions& o) 
 
 PublishReport Publish(const Scenario& scenario, const PublishOptions& o) {
   if (!(o.rate_hz >= 0)) throw std::invalid_argument("publish rate must be >= 0 Hz");
+  if (o.render_threads < 1) throw std::invalid_argument("publish needs at least 1 render thread");
   if (scenario.frame_count() == 0) return PublishEyeHand(scenario, o);
 
   dds::Participant participant(o.domain_id, "epmap-sim");
@@ -156,28 +187,9 @@ PublishReport Publish(const Scenario& scenario, const PublishOptions& o) {
             participant, o.topics.odom);
   }
 
-  // Render ahead while discovery runs.
-  const int total = scenario.frame_count();
-  FrameQueue queue(3);
-  std::exception_ptr render_error;
-  std::thread renderer([&] {
-    try {
-      for (int i = 0; i < total; ++i) {
-        if (!queue.Push(scenario.Render(i))) return;
-      }
-    } catch (...) {
-      render_error = std::current_exception();
-    }
-    queue.Close();
-  });
-  struct JoinOnExit {
-    FrameQueue& q;
-    std::thread& t;
-    ~JoinOnExit() {
-      q.Close();
-      if (t.joinable()) t.join();
-    }
-  } join_on_exit{queue, renderer};
+  // Render ahead while discovery runs: two workers, so that a frame's ~25 ms of rendering on
+  // one core leaves room for sending at 30 Hz.
+  RenderAhead frames(scenario, o.render_threads, 6);
 
   PublishReport report;
   const auto deadline = Clock::now() + o.wait_for_readers;
@@ -208,13 +220,15 @@ PublishReport Publish(const Scenario& scenario, const PublishOptions& o) {
   report.first_stamp_ns = wall0;
   const auto t0 = Clock::now();
   int sent = 0;
-  while (auto frame = queue.Pop()) {
+  while (auto frame = frames.Next()) {
     if (o.stop_requested && o.stop_requested()) break;
     if (!o.as_fast_as_possible) {
       const auto due = t0 + std::chrono::duration_cast<Clock::duration>(
                                 std::chrono::duration<double>(sent / rate));
-      if (Clock::now() > due + std::chrono::milliseconds(5)) {
+      const double late_ms = std::chrono::duration<double, std::milli>(Clock::now() - due).count();
+      if (late_ms > 5) {
         ++report.late_frames;
+        report.max_late_ms = std::max(report.max_late_ms, late_ms);
       } else {
         std::this_thread::sleep_until(due);
       }
@@ -242,20 +256,18 @@ PublishReport Publish(const Scenario& scenario, const PublishOptions& o) {
     right.Write(right_msg);
     ++sent;
   }
-  if (renderer.joinable()) {
-    queue.Close();
-    renderer.join();
-  }
-  if (render_error) std::rethrow_exception(render_error);
+  frames.Stop();
   report.frames_sent = sent;
   report.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
   // Let reliable readers catch up before the participant goes away.
   left.WaitForAcknowledgments(std::chrono::milliseconds(2000));
   right.WaitForAcknowledgments(std::chrono::milliseconds(2000));
   std::this_thread::sleep_for(o.grace);
-  if (report.late_frames > 0) {
+  if (report.max_late_ms > 100) {
     Log(o, "warning: " + std::to_string(report.late_frames) + " of " + std::to_string(sent) +
-               " frames were sent late (rendering slower than " + std::to_string(rate) + " Hz)");
+               " frames went out more than 5 ms after their time, the latest by " +
+               std::to_string(static_cast<int>(report.max_late_ms)) +
+               " ms (rendering could not keep up with " + std::to_string(rate) + " Hz)");
   }
   return report;
 }

@@ -26,14 +26,16 @@ struct PublishOptions {
   // discovery so that no frame is lost.
   std::chrono::milliseconds wait_for_readers{10'000};
   std::chrono::milliseconds grace{500};
+  int render_threads = 2;                       // frames rendered ahead in parallel
   std::function<bool()> stop_requested;         // polled between frames (e.g. SIGINT)
   std::function<void(const std::string&)> log;  // warnings and a summary
 };
 
 struct PublishReport {
-  int frames_sent = 0;  // stereo frames (or eye-hand paths) written
-  double seconds = 0;   // from the first frame sent to the last
-  int late_frames = 0;  // frames sent after their scheduled time (rendering too slow)
+  int frames_sent = 0;     // stereo frames (or eye-hand paths) written
+  double seconds = 0;      // from the first frame sent to the last
+  int late_frames = 0;     // frames sent more than 5 ms after their scheduled time
+  double max_late_ms = 0;  // the latest of them
   bool readers_matched = false;
   int64_t first_stamp_ns = 0;  // wall-clock stamp of frame 0
 };

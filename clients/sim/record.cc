@@ -26,15 +26,19 @@ void AppendFields(std::string* line, std::initializer_list<double> values) {
 }
 
 void RecordEyeHand(const Scenario& scenario, dataset::Writer& w) {
-  // X_A as measured (with noise) and, for reference, the noise-free X_A in gt_samples.csv.
+  // X_A as measured (with noise) in samples.csv; the same rows with the noise-free X_A in
+  // gt_samples.csv.
   const std::string header = "#timestamp [ns],xa [m],ya [m],za [m],xb [m],yb [m],zb [m],path\n";
-  std::string samples = header;
+  std::string samples = header, truth = header;
   for (const auto& s : scenario.EyeHandSamples()) {
-    samples.append(Stamp(s.stamp_ns));
-    AppendFields(&samples, {s.xa.x(), s.xa.y(), s.xa.z(), s.xb.x(), s.xb.y(), s.xb.z()});
-    samples.append(",").append(s.path).append("\n");
+    for (auto [csv, xa] : {std::pair(&samples, s.xa), std::pair(&truth, s.xa_noise_free)}) {
+      csv->append(Stamp(s.stamp_ns));
+      AppendFields(csv, {xa.x(), xa.y(), xa.z(), s.xb.x(), s.xb.y(), s.xb.z()});
+      csv->append(",").append(s.path).append("\n");
+    }
   }
   w.WriteFile("samples.csv", samples);
+  w.WriteFile("gt_samples.csv", truth);
   w.WriteUrdf(scenario.urdf());
 }
 
@@ -70,7 +74,7 @@ void Record(const Scenario& scenario, const std::filesystem::path& out, bool for
     if (f.odometry) w.AddOdometry(*f.odometry);
     w.AddGtCameraPose(f.stamp_ns, f.gt_T_world_cam0);
     if (f.gt_base) w.AddGtBasePose(*f.gt_base);
-    if (!f.gt_disparity.empty()) w.AddGtDisparity(f.stamp_ns, f.gt_disparity);
+    if (scenario.RecordsDisparity(f)) w.AddGtDisparity(f.stamp_ns, f.gt_disparity);
     if (scenario.has_moving_objects()) w.AddGtUnexpected(f.stamp_ns, f.gt_unexpected);
 
     gt_joints.append(Stamp(f.stamp_ns));
@@ -86,6 +90,15 @@ void Record(const Scenario& scenario, const std::filesystem::path& out, bool for
   w.WriteFile("gt_joints0/data.csv", gt_joints);
   w.WriteFile("gt_extrinsics0/data.csv", gt_extrinsics);
   if (const auto walls = scenario.Walls(); !walls.empty()) w.WriteWalls(walls);
+  if (const auto furniture = scenario.Furniture(); !furniture.empty()) {
+    std::string csv = "x1 [m],y1 [m],x2 [m],y2 [m]\n";
+    for (const auto& s : furniture) {
+      char line[160];
+      std::snprintf(line, sizeof(line), "%.6f,%.6f,%.6f,%.6f\n", s.x1, s.y1, s.x2, s.y2);
+      csv.append(line);
+    }
+    w.WriteFile("gt_map/furniture.csv", csv);
+  }
 }
 
 }  // namespace epmap::sim

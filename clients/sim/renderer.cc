@@ -219,7 +219,8 @@ void Render(const Scene& scene, const std::vector<Quad>& moving, const PinholeCa
   out->inv_depth.create(H, W, CV_32FC1);
   out->object.create(H, W, CV_8UC1);
   std::fill_n(out->inv_depth.ptr<float>(), static_cast<size_t>(W) * H, 0.0F);
-  cv::Mat face_buffer(H, W, CV_32SC1);
+  out->face.create(H, W, CV_32SC1);
+  cv::Mat& face_buffer = out->face;
   std::fill_n(face_buffer.ptr<int32_t>(), static_cast<size_t>(W) * H, -1);
 
   const Eigen::Isometry3d T_cam_world = T_world_cam.inverse();

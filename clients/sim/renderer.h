@@ -51,6 +51,7 @@ struct RenderOutput {
   cv::Mat radiance;   // CV_32FC(channels), 0..255, before optics and sensor
   cv::Mat inv_depth;  // CV_32FC1, 1/z in 1/m (z along the optical axis), 0 = nothing seen
   cv::Mat object;     // CV_8UC1, Quad::object of the visible face (0 = static or nothing)
+  cv::Mat face;       // CV_32SC1 scratch: index of the visible face (-1 = none)
 };
 
 // Renders `scene.quads` plus `moving` (faces of objects that move on their own, same textures)

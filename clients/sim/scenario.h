@@ -47,7 +47,8 @@ struct EyeHandSample {
   int64_t stamp_ns = 0;
   Eigen::Vector3d xa = Eigen::Vector3d::Zero();
   Eigen::Vector3d xb = Eigen::Vector3d::Zero();
-  std::string path;  // ellipsoid label, e00..e19
+  std::string path;                                         // ellipsoid label, e00..e19
+  Eigen::Vector3d xa_noise_free = Eigen::Vector3d::Zero();  // ground truth: X_A without noise
 };
 
 struct SimFrame {
@@ -67,6 +68,7 @@ struct SimFrame {
   Eigen::Isometry3d gt_T_world_cam1 = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d gt_T_cam0_cam1 = Eigen::Isometry3d::Identity();  // true stereo extrinsics
   std::optional<dataset::PlanarPose> gt_base;  // true base pose in the world (building)
+  bool at_stop = false;  // building: the base stands still and the camera pans (look-around)
 };
 
 class Scenario {
@@ -98,15 +100,25 @@ class Scenario {
 
   // Renders frame `index` in [0, frame_count()). Thread-safe and deterministic. Throws
   // std::out_of_range for a bad index, std::logic_error for a scenario without images.
-  virtual SimFrame Render(int index) const = 0;
+  SimFrame Render(int index) const { return RenderFrame(index, true); }
+  // The same frame with only what the robot's sensors give (images, encoders, odometry, stamp)
+  // and the true poses: no depth, disparity or motion masks (cheaper, for publishing).
+  SimFrame RenderSensors(int index) const { return RenderFrame(index, false); }
 
   virtual std::vector<EyeHandSample> EyeHandSamples() const { return {}; }
+  // Mobile-robot worlds: footprints (world frame) of the walls' vertical faces, door frames
+  // included, and of the furniture standing on the floor.
   virtual std::vector<dataset::WallSegment> Walls() const { return {}; }
+  virtual std::vector<dataset::WallSegment> Furniture() const { return {}; }
+  // Whether Record writes gt_disparity0 for this frame (building: only at the look-around
+  // stops, to keep the dataset small; SimFrame::gt_disparity is always filled in memory).
+  virtual bool RecordsDisparity(const SimFrame& frame) const { return !frame.gt_disparity.empty(); }
   // A one-line summary for logs.
   virtual std::string Describe() const;
 
  protected:
   explicit Scenario(ScenarioOptions options) : options_(std::move(options)) {}
+  virtual SimFrame RenderFrame(int index, bool ground_truth) const = 0;
   void CheckIndex(int index) const;
 
  private:

@@ -11,12 +11,12 @@ cv::Mat Expose(const cv::Mat& radiance, double gain, const SensorModel& sensor, 
   if (radiance.depth() != CV_32F || (radiance.channels() != 1 && radiance.channels() != 3)) {
     throw std::invalid_argument("Expose: radiance must be CV_32FC1 or CV_32FC3");
   }
-  cv::Mat blurred;
+  thread_local cv::Mat blur_buffer;  // reused on this thread (see stereo_shot.cc)
+  const cv::Mat* blurred = &radiance;
   if (sensor.blur_sigma_px > 0) {
-    cv::GaussianBlur(radiance, blurred, cv::Size(0, 0), sensor.blur_sigma_px, 0,
+    cv::GaussianBlur(radiance, blur_buffer, cv::Size(0, 0), sensor.blur_sigma_px, 0,
                      cv::BORDER_REPLICATE);
-  } else {
-    blurred = radiance;
+    blurred = &blur_buffer;
   }
   // Gaussian samples from a table indexed by random bits: drawing a fresh normal per channel
   // and pixel would cost more than rendering the image.
@@ -31,7 +31,7 @@ cv::Mat Expose(const cv::Mat& radiance, double gain, const SensorModel& sensor, 
   uint64_t bits = 0;
   int bits_left = 0;
   for (int y = 0; y < radiance.rows; ++y) {
-    const float* in = blurred.ptr<float>(y);
+    const float* in = blurred->ptr<float>(y);
     uint8_t* o = out.ptr<uint8_t>(y);
     for (int i = 0; i < values_per_row; ++i) {
       float v = in[i] * g;

@@ -22,13 +22,14 @@ struct StereoShot {
   SensorModel sensor;
   uint64_t seed = 1;  // image noise is drawn from (seed, frame index, camera)
   int index = 0;
+  bool ground_truth = true;  // false: images and poses only
   // Rectified rig: cam1 = cam0 shifted by `baseline` along cam0's x; fills gt_disparity.
   bool rectified = false;
   double baseline = 0;
 };
 
-// Fills frame->left, right, gt_depth, gt_depth_right, gt_unexpected, gt_T_world_cam0/1,
-// gt_T_cam0_cam1 and (rectified rigs) gt_disparity.
+// Fills frame->left, right, gt_T_world_cam0/1, gt_T_cam0_cam1 and, with ground_truth,
+// gt_depth, gt_depth_right, gt_unexpected and (rectified rigs) gt_disparity.
 void ShootStereo(const StereoShot& shot, SimFrame* frame);
 
 }  // namespace epmap::sim

@@ -27,7 +27,7 @@ double RotationAngle(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
 }
 
 TEST(HeadScenario, RightImageWarpedByTrueDisparityReproducesLeft) {
-  const auto s = MakeScenario(Small("head"));
+  const Scenario* s = &testing::Shared(Small("head"));
   ASSERT_TRUE(s->rectified());
   for (int index : {0, 41, 170}) {
     const SimFrame f = s->Render(index);
@@ -54,7 +54,7 @@ TEST(HeadScenario, RightImageWarpedByTrueDisparityReproducesLeft) {
 }
 
 TEST(HeadScenario, WithoutNoiseTheWarpIsTighter) {
-  const auto s = MakeScenario(Small("head", false));
+  const Scenario* s = &testing::Shared(Small("head", false));
   const SimFrame f = s->Render(100);
   const auto stats = testing::WarpRightIntoLeft(f, s->cam0(), 3.0);
   EXPECT_GE(stats.consistent_share(), 0.95);
@@ -63,7 +63,7 @@ TEST(HeadScenario, WithoutNoiseTheWarpIsTighter) {
 TEST(HeadScenario, UrdfThroughKdlGivesTheRenderedCameraPoses) {
   // --no-noise: encoder readings are the true joints and the true chain is the shipped URDF.
   {
-    const auto s = MakeScenario(Small("head", false));
+    const Scenario* s = &testing::Shared(Small("head", false));
     auto chain = kinematics::UrdfChain::FromString(s->urdf());
     chain.BindJointOrder(s->joint_names());
     for (int index : {0, 77, 299}) {
@@ -76,7 +76,7 @@ TEST(HeadScenario, UrdfThroughKdlGivesTheRenderedCameraPoses) {
   }
   // With noise: the true joints through the true chain give the rendered poses exactly; the
   // encoder readings through the shipped URDF are off by the unmodelled offsets and noise.
-  const auto s = MakeScenario(Small("head"));
+  const Scenario* s = &testing::Shared(Small("head"));
   EXPECT_NE(s->true_urdf(), s->urdf());
   auto truth = kinematics::UrdfChain::FromString(s->true_urdf());
   auto nominal = kinematics::UrdfChain::FromString(s->urdf());
@@ -99,7 +99,7 @@ TEST(HeadScenario, UrdfThroughKdlGivesTheRenderedCameraPoses) {
 }
 
 TEST(HeadScenario, NeckMovesSmoothlyEyesStayParallelEncodersAreQuantised) {
-  const auto s = MakeScenario(Small("head"));
+  const Scenario* s = &testing::Shared(Small("head"));
   EXPECT_EQ(s->frame_count(), 300);
   EXPECT_DOUBLE_EQ(s->rate_hz(), 30.0);
   EXPECT_EQ(s->joint_names(),
@@ -135,7 +135,7 @@ TEST(HeadScenario, ToyIsSeenInAboutHalfTheFramesAndCoversUnderTenPercent) {
   ScenarioOptions o = Small("head");
   o.width = 160;
   o.height = 120;
-  const auto s = MakeScenario(o);
+  const Scenario* s = &testing::Shared(o);
   int seen = 0, frames = 0;
   double max_cover = 0;
   for (int i = 0; i < s->frame_count(); i += 2, ++frames) {
@@ -152,7 +152,7 @@ TEST(HeadScenario, ToyIsSeenInAboutHalfTheFramesAndCoversUnderTenPercent) {
 }
 
 TEST(HeadScenario, DisparityRangeCoversTheScene) {
-  const auto s = MakeScenario(Small("head"));
+  const Scenario* s = &testing::Shared(Small("head"));
   for (int i = 0; i < 300; i += 37) {
     const SimFrame f = s->Render(i);
     double lo, hi;
@@ -162,8 +162,21 @@ TEST(HeadScenario, DisparityRangeCoversTheScene) {
   }
 }
 
+TEST(HeadScenario, SensorsOnlyFrameHasTheSameImagesWithoutGroundTruth) {
+  const Scenario* s = &testing::Shared(Small("head"));
+  const SimFrame full = s->Render(60), sensors = s->RenderSensors(60);
+  EXPECT_EQ(cv::norm(full.left, sensors.left, cv::NORM_INF), 0);
+  EXPECT_EQ(cv::norm(full.right, sensors.right, cv::NORM_INF), 0);
+  EXPECT_EQ(full.joints, sensors.joints);
+  EXPECT_EQ(full.stamp_ns, sensors.stamp_ns);
+  EXPECT_TRUE(sensors.gt_disparity.empty());
+  EXPECT_TRUE(sensors.gt_depth.empty());
+  EXPECT_TRUE(sensors.gt_unexpected.empty());
+  EXPECT_TRUE(full.gt_T_world_cam0.isApprox(sensors.gt_T_world_cam0, 0));
+}
+
 TEST(HeadScenario, RenderIsDeterministicAndIndependentOfOrder) {
-  const auto a = MakeScenario(Small("head"));
+  const auto a = MakeScenario(Small("head"));  // two separate instances
   const auto b = MakeScenario(Small("head"));
   const SimFrame late = b->Render(120);
   b->Render(3);

@@ -4,11 +4,25 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <map>
+#include <memory>
 #include <opencv2/core.hpp>
+#include <string>
 
 #include "clients/sim/scenario.h"
 
 namespace epmap::sim::testing {
+
+// Scenarios are built once per binary: their textures take a few hundred milliseconds.
+inline const Scenario& Shared(const ScenarioOptions& o) {
+  static std::map<std::string, std::unique_ptr<Scenario>> cache;
+  const std::string key = o.name + "/" + std::to_string(o.width) + "x" + std::to_string(o.height) +
+                          "/" + std::to_string(o.frames) + "/" + std::to_string(o.seed) + "/" +
+                          std::to_string(o.noise) + std::to_string(o.reverse);
+  auto& s = cache[key];
+  if (!s) s = MakeScenario(o);
+  return *s;
+}
 
 struct WarpStats {
   size_t visible = 0;     // left pixels whose true point is seen by the right camera too

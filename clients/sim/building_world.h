@@ -1,0 +1,37 @@
+#pragma once
+// The office floor of scenario `building` (papers 002 and 003: a mobile robot with a panning
+// stereo head wandering through corridors and rooms). Everything here is in the floor frame F:
+// x east, y north, z up, the floor at z = 0, the building's south-west corner at the origin.
+// The floor measures 28 m x 28.5 m: two crossing corridors 2.5 m wide and eight rooms with
+// doors, painted walls (some plain), skirting boards, door frames, posters, desks, chairs,
+// cabinets, bookshelves and plants.
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
+
+#include "clients/sim/renderer.h"
+#include "common/dataset/dataset.h"
+
+namespace epmap::sim {
+
+struct BuildingWorld {
+  Scene scene;  // grey
+  // Footprints (floor frame) of the vertical faces of the walls, door frames included, and of
+  // the furniture standing on the floor.
+  std::vector<dataset::WallSegment> wall_faces;
+  std::vector<dataset::WallSegment> furniture_faces;
+};
+
+inline constexpr double kBuildingWidthM = 28.0;  // x
+inline constexpr double kBuildingDepthM = 28.5;  // y
+inline constexpr double kCeilingHeightM = 2.6;
+
+BuildingWorld BuildBuilding(uint64_t seed);
+
+// The route of the forward run (floor frame): the robot starts at the first point facing the
+// second and drives straight between consecutive points, turning in place at each.
+// About 59 m through a room, a door, both corridors and a second room.
+std::vector<Eigen::Vector2d> BuildingRoute();
+
+}  // namespace epmap::sim

@@ -1,0 +1,174 @@
+// epmap-sim publish on its own DDS domain, received by common/dds readers in this process:
+// every frame arrives, with images identical to what the library renders for the same options,
+// camera_info of a rectified driver and joint states at the image stamps.
+
+#include <gtest/gtest.h>
+
+#include <epmap_dds/CameraInfoPubSubTypes.h>
+#include <epmap_dds/EyeHandSamplesPubSubTypes.h>
+#include <epmap_dds/ImagePubSubTypes.h>
+#include <epmap_dds/JointStatePubSubTypes.h>
+#include <epmap_dds/OdometryPubSubTypes.h>
+
+#include <map>
+#include <mutex>
+
+#include "clients/sim/scenario.h"
+#include "common/dds/endpoints.h"
+#include "common/dds/participant.h"
+#include "common/dds/ros_conversions.h"
+#include "common/dds/topics.h"
+#include "tests/e2e/sim/run_command.h"
+#include "tests/support/test_env.h"
+
+namespace epmap::sim {
+namespace {
+
+TEST(EpmapSimPublish, EveryFrameArrivesIntact) {
+  const uint32_t domain = epmap::testing::UniqueDomainId(11);
+  const dds::TopicNames topics;
+  dds::Participant participant(domain, "sim-publish-test");
+  std::mutex mutex;
+  std::map<int64_t, cv::Mat> left, right;
+  std::vector<dds::CameraCalibration> right_infos;
+  std::vector<dds::JointReading> joints;
+  const uint32_t kMax = 8u << 20;
+  dds::Reader<sensor_msgs::msg::Image, sensor_msgs::msg::ImagePubSubType> left_reader(
+      participant, topics.left_image,
+      [&](sensor_msgs::msg::Image&& m) {
+        std::string reason;
+        cv::Mat img = dds::ImageToMat(m, &reason);
+        std::lock_guard lock(mutex);
+        left[dds::ToNanoseconds(m.header().stamp())] = img;
+      },
+      kMax, 50);
+  dds::Reader<sensor_msgs::msg::Image, sensor_msgs::msg::ImagePubSubType> right_reader(
+      participant, topics.right_image,
+      [&](sensor_msgs::msg::Image&& m) {
+        std::string reason;
+        cv::Mat img = dds::ImageToMat(m, &reason);
+        std::lock_guard lock(mutex);
+        right[dds::ToNanoseconds(m.header().stamp())] = img;
+      },
+      kMax, 50);
+  dds::Reader<sensor_msgs::msg::CameraInfo, sensor_msgs::msg::CameraInfoPubSubType> info_reader(
+      participant, topics.right_info,
+      [&](sensor_msgs::msg::CameraInfo&& m) {
+        std::string reason;
+        auto c = dds::FromCameraInfo(m, &reason);
+        std::lock_guard lock(mutex);
+        if (c) right_infos.push_back(*c);
+      },
+      1u << 20, 50);
+  dds::Reader<sensor_msgs::msg::JointState, sensor_msgs::msg::JointStatePubSubType> joint_reader(
+      participant, topics.joints,
+      [&](sensor_msgs::msg::JointState&& m) {
+        std::string reason;
+        auto j = dds::FromJointState(m, &reason);
+        std::lock_guard lock(mutex);
+        if (j) joints.push_back(*j);
+      },
+      1u << 20, 50);
+
+  constexpr int kFrames = 6;
+  const auto r = testing::RunCommand(
+      (epmap::testing::BinDir() / "epmap-sim").string() + " publish --scenario head --domain " +
+      std::to_string(domain) + " --frames " + std::to_string(kFrames) + " --size 160x120 --seed 5");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(r.output.find("warning"), std::string::npos) << r.output;
+
+  ScenarioOptions o;
+  o.name = "head";
+  o.frames = kFrames;
+  o.width = 160;
+  o.height = 120;
+  o.seed = 5;
+  const auto scenario = MakeScenario(o);
+  std::lock_guard lock(mutex);
+  ASSERT_EQ(left.size(), static_cast<size_t>(kFrames));
+  ASSERT_EQ(right.size(), static_cast<size_t>(kFrames));
+  ASSERT_EQ(joints.size(), static_cast<size_t>(kFrames));
+  ASSERT_EQ(right_infos.size(), static_cast<size_t>(kFrames));
+  int i = 0;
+  int64_t first = left.begin()->first;
+  for (const auto& [stamp, image] : left) {
+    const SimFrame f = scenario->Render(i);
+    // Stamps: the wall clock at the start plus the scenario's frame times.
+    EXPECT_EQ(stamp - first, f.stamp_ns - scenario->StampNs(0));
+    ASSERT_TRUE(right.count(stamp));
+    EXPECT_EQ(cv::norm(image, f.left, cv::NORM_INF), 0) << "left frame " << i;
+    EXPECT_EQ(cv::norm(right.at(stamp), f.right, cv::NORM_INF), 0) << "right frame " << i;
+    EXPECT_EQ(joints[static_cast<size_t>(i)].stamp_ns, stamp);
+    EXPECT_EQ(joints[static_cast<size_t>(i)].names, scenario->joint_names());
+    EXPECT_EQ(joints[static_cast<size_t>(i)].positions, f.joints);
+    ++i;
+  }
+  const double fx = scenario->cam0().fu;
+  EXPECT_NEAR(right_infos[0].baseline_from_p(), 0.068, 1e-9);
+  EXPECT_DOUBLE_EQ(right_infos[0].p[0], fx);
+  EXPECT_DOUBLE_EQ(right_infos[0].k[0], fx);
+}
+
+TEST(EpmapSimPublish, BuildingSendsGreyImagesAndOdometry) {
+  const uint32_t domain = epmap::testing::UniqueDomainId(12);
+  const dds::TopicNames topics;
+  dds::Participant participant(domain, "sim-publish-building-test");
+  std::mutex mutex;
+  std::vector<cv::Mat> images;
+  std::vector<dds::PlanarOdometry> odometry;
+  dds::Reader<sensor_msgs::msg::Image, sensor_msgs::msg::ImagePubSubType> left_reader(
+      participant, topics.left_image,
+      [&](sensor_msgs::msg::Image&& m) {
+        std::string reason;
+        cv::Mat img = dds::ImageToMat(m, &reason);
+        std::lock_guard lock(mutex);
+        images.push_back(img);
+      },
+      8u << 20, 50);
+  dds::Reader<sensor_msgs::msg::Image, sensor_msgs::msg::ImagePubSubType> right_reader(
+      participant, topics.right_image, [](sensor_msgs::msg::Image&&) {}, 8u << 20, 50);
+  dds::Reader<nav_msgs::msg::Odometry, nav_msgs::msg::OdometryPubSubType> odom_reader(
+      participant, topics.odom,
+      [&](nav_msgs::msg::Odometry&& m) {
+        std::string reason;
+        auto o = dds::FromOdometry(m, &reason);
+        std::lock_guard lock(mutex);
+        if (o) odometry.push_back(*o);
+      },
+      1u << 20, 50);
+  const auto r = testing::RunCommand((epmap::testing::BinDir() / "epmap-sim").string() +
+                                     " publish --scenario building --domain " +
+                                     std::to_string(domain) + " --frames 12 --size 80x60");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::lock_guard lock(mutex);
+  ASSERT_EQ(images.size(), 12u);
+  EXPECT_EQ(images[0].type(), CV_8UC1);
+  ASSERT_EQ(odometry.size(), 12u);
+  // The robot drives off after its first look-around (7 frames).
+  EXPECT_GT(odometry.back().x, 0.1);
+}
+
+TEST(EpmapSimPublish, EyeHandSendsOneMessagePerPath) {
+  const uint32_t domain = epmap::testing::UniqueDomainId(13);
+  const dds::TopicNames topics;
+  dds::Participant participant(domain, "sim-publish-eye-hand-test");
+  std::mutex mutex;
+  std::map<std::string, size_t> per_path;
+  dds::Reader<epmap_msgs::msg::EyeHandSamples, epmap_msgs::msg::EyeHandSamplesPubSubType> reader(
+      participant, topics.eye_hand_samples,
+      [&](epmap_msgs::msg::EyeHandSamples&& m) {
+        std::lock_guard lock(mutex);
+        for (const auto& s : m.samples()) per_path[s.path()]++;
+      },
+      4u << 20, 50);
+  const auto r = testing::RunCommand((epmap::testing::BinDir() / "epmap-sim").string() +
+                                     " publish --scenario eye-hand --rate 20 --domain " +
+                                     std::to_string(domain));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::lock_guard lock(mutex);
+  ASSERT_EQ(per_path.size(), 20u);
+  for (const auto& [path, n] : per_path) EXPECT_EQ(n, 100u) << path;
+}
+
+}  // namespace
+}  // namespace epmap::sim

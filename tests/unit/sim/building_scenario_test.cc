@@ -1,0 +1,188 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "clients/sim/record.h"
+#include "clients/sim/scenario.h"
+#include "common/dataset/dataset.h"
+#include "perception/kinematics/urdf_chain.h"
+#include "tests/support/test_env.h"
+#include "tests/unit/sim/warp_check.h"
+
+namespace epmap::sim {
+namespace {
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+ScenarioOptions Building(bool noise = true, bool reverse = false) {
+  ScenarioOptions o;
+  o.name = "building";
+  o.noise = noise;
+  o.reverse = reverse;
+  return o;
+}
+
+Eigen::Isometry3d Planar(const dataset::PlanarPose& p) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.translation() = Eigen::Vector3d(p.x, p.y, 0);
+  T.linear() = Eigen::AngleAxisd(p.theta, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  return T;
+}
+
+TEST(BuildingScenario, RightImageWarpedByTrueDisparityReproducesLeft) {
+  const Scenario* s = &testing::Shared(Building());
+  EXPECT_TRUE(s->rectified());
+  const auto cam = s->cam0();
+  EXPECT_EQ(cam.width, 320);
+  EXPECT_NEAR(cam.fu, 251.48735, 1e-9);
+  for (int index : {2, 150, 900}) {
+    const SimFrame f = s->Render(index);
+    ASSERT_EQ(f.left.type(), CV_8UC1);
+    EXPECT_NEAR(f.gt_T_cam0_cam1.translation().x(), 0.12, 1e-12);
+    const auto stats = testing::WarpRightIntoLeft(f, cam, 10.0);
+    EXPECT_GT(stats.visible, 0.6 * f.left.total()) << "frame " << index;
+    EXPECT_GE(stats.consistent_share(), 0.95) << "frame " << index;
+  }
+}
+
+TEST(BuildingScenario, UrdfThroughKdlGivesTheRenderedCameraPoses) {
+  const Scenario* s = &testing::Shared(Building(false));
+  auto chain = kinematics::UrdfChain::FromString(s->urdf());
+  EXPECT_EQ(s->joint_names(), std::vector<std::string>{"pan"});
+  for (int index : {1, 400, 1200}) {
+    const SimFrame f = s->Render(index);
+    EXPECT_EQ(f.joints, f.gt_joints);
+    const Eigen::Isometry3d T = Planar(*f.gt_base) * chain.Cam0Pose(f.joints);
+    EXPECT_LT((T.matrix() - f.gt_T_world_cam0.matrix()).cwiseAbs().maxCoeff(), 1e-9);
+    // Exact odometry without noise: the forward run's start is the world frame.
+    EXPECT_NEAR(f.odometry->x, f.gt_base->x, 1e-9);
+    EXPECT_NEAR(f.odometry->y, f.gt_base->y, 1e-9);
+    EXPECT_NEAR(std::remainder(f.odometry->theta - f.gt_base->theta, 2 * std::numbers::pi), 0,
+                1e-9);
+  }
+}
+
+TEST(BuildingScenario, RouteStopsToLookAroundAndOdometryDrifts) {
+  ScenarioOptions o = Building();
+  o.width = 32;  // geometry only: tiny images
+  o.height = 24;
+  const Scenario* s = &testing::Shared(o);
+  EXPECT_GT(s->frame_count(), 1000);
+  EXPECT_LT(s->frame_count(), 3000);
+  EXPECT_DOUBLE_EQ(s->rate_hz(), 10.0);
+  double length = 0, max_step = 0;
+  int stops = 0;
+  dataset::PlanarPose previous = *s->Render(0).gt_base;
+  SimFrame last;
+  for (int i = 0; i < s->frame_count(); ++i) {
+    last = s->Render(i);
+    const double step = std::hypot(last.gt_base->x - previous.x, last.gt_base->y - previous.y);
+    length += step;
+    max_step = std::max(max_step, step);
+    if (last.at_stop) {
+      ++stops;
+      EXPECT_EQ(step, 0.0);
+      EXPECT_LE(std::abs(last.gt_joints[0]), 60 * kDeg + 1e-9);
+    } else {
+      EXPECT_EQ(last.gt_joints[0], 0.0);
+    }
+    previous = *last.gt_base;
+  }
+  EXPECT_NEAR(length, 60.0, 1.5);
+  EXPECT_LE(max_step, 0.05 + 1e-9);
+  EXPECT_GT(stops / 7, 60);  // every metre or 45 degrees, 7 views each
+  // Heading error of the dead reckoning at the end: of the order of 20 degrees (paper 002).
+  const double heading_error =
+      std::abs(std::remainder(last.odometry->theta - last.gt_base->theta, 2 * std::numbers::pi));
+  EXPECT_GT(heading_error, 10 * kDeg);
+  EXPECT_LT(heading_error, 30 * kDeg);
+  const double position_error =
+      std::hypot(last.odometry->x - last.gt_base->x, last.odometry->y - last.gt_base->y);
+  EXPECT_GT(position_error, 0.5);
+}
+
+TEST(BuildingScenario, ReverseStartsWhereTheForwardRunEnds) {
+  ScenarioOptions o = Building();
+  o.width = 32;
+  o.height = 24;
+  const Scenario* forward = &testing::Shared(o);
+  o.reverse = true;
+  const Scenario* backward = &testing::Shared(o);
+  const auto end = *forward->Render(forward->frame_count() - 1).gt_base;
+  const auto start = *backward->Render(0).gt_base;
+  EXPECT_NEAR(start.x, end.x, 1e-9);
+  EXPECT_NEAR(start.y, end.y, 1e-9);
+  EXPECT_NEAR(std::abs(std::remainder(start.theta - end.theta, 2 * std::numbers::pi)),
+              std::numbers::pi, 1e-9);
+  const auto back_end = *backward->Render(backward->frame_count() - 1).gt_base;
+  EXPECT_NEAR(back_end.x, 0.0, 1e-9);  // it ends where the forward run started
+  EXPECT_NEAR(back_end.y, 0.0, 1e-9);
+  // Its odometry starts at zero in its own start frame.
+  const auto odom0 = *backward->Render(0).odometry;
+  EXPECT_EQ(odom0.x, 0.0);
+  EXPECT_EQ(odom0.theta, 0.0);
+}
+
+TEST(BuildingScenario, FloorPlanAndDisparityRange) {
+  const Scenario* s = &testing::Shared(Building());
+  const auto walls = s->Walls();
+  ASSERT_GT(walls.size(), 50u);
+  double min_x = 1e9, max_x = -1e9, min_y = 1e9, max_y = -1e9;
+  for (const auto& w : walls) {
+    for (const auto& [x, y] : {std::pair(w.x1, w.y1), std::pair(w.x2, w.y2)}) {
+      min_x = std::min(min_x, x);
+      max_x = std::max(max_x, x);
+      min_y = std::min(min_y, y);
+      max_y = std::max(max_y, y);
+    }
+  }
+  // World frame = start pose, facing north: the 28 m (east-west) side spans world y.
+  EXPECT_NEAR(max_x - min_x, 28.5 + 0.24, 0.01);
+  EXPECT_NEAR(max_y - min_y, 28.0 + 0.24, 0.01);
+  EXPECT_FALSE(s->Furniture().empty());
+  // The disparity range covers the scene but for a jamb seen at ~0.35 m from two doorway stops.
+  size_t known = 0, beyond = 0;
+  for (int i = 0; i < s->frame_count(); i += 23) {
+    const cv::Mat d = s->Render(i).gt_disparity;
+    known += static_cast<size_t>(cv::countNonZero(d > 0));
+    beyond += static_cast<size_t>(cv::countNonZero(d >= s->num_disparities()));
+  }
+  EXPECT_GT(known, 0u);
+  EXPECT_LT(double(beyond) / known, 1e-3);
+}
+
+TEST(BuildingScenario, RecordWritesOdometryMapAndDisparityAtStops) {
+  const auto dir = epmap::testing::FreshTempDir("sim-building");
+  ScenarioOptions o = Building();
+  o.frames = 20;
+  o.width = 160;
+  o.height = 120;
+  const Scenario* s = &testing::Shared(o);
+  Record(*s, dir / "b", false);
+  const auto d = dataset::Load(dir / "b");
+  EXPECT_EQ(d.frames.size(), 20u);
+  EXPECT_TRUE(d.rectified());
+  EXPECT_NEAR(d.baseline_m(), 0.12, 1e-9);
+  EXPECT_EQ(d.odometry.size(), 20u);
+  EXPECT_EQ(d.gt_base_pose.size(), 20u);
+  EXPECT_EQ(d.gt_disparity.size(), 7u);  // the first look-around only
+  EXPECT_EQ(d.walls.size(), s->Walls().size());
+  EXPECT_TRUE(std::filesystem::exists(dir / "b/mav0/gt_map/furniture.csv"));
+  EXPECT_EQ(d.joint_names, std::vector<std::string>{"pan"});
+  std::filesystem::remove_all(dir);
+}
+
+TEST(BuildingScenario, TooManyFramesIsAClearError) {
+  ScenarioOptions o = Building();
+  o.frames = 100000;
+  try {
+    MakeScenario(o);
+    FAIL() << "expected std::invalid_argument";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("route has"), std::string::npos);
+  }
+}
+
+}  // namespace
+}  // namespace epmap::sim

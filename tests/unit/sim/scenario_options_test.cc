@@ -1,0 +1,64 @@
+#include <gtest/gtest.h>
+
+#include "clients/sim/scenario.h"
+
+namespace epmap::sim {
+namespace {
+
+std::string ErrorOf(const ScenarioOptions& o) {
+  try {
+    MakeScenario(o);
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(ScenarioOptions, BadInputIsRefusedWithTheReason) {
+  ScenarioOptions o;
+  o.name = "kitchen";
+  EXPECT_NE(ErrorOf(o).find("unknown scenario 'kitchen'"), std::string::npos);
+  EXPECT_NE(ErrorOf(o).find("head, vergence, building, eye-hand"), std::string::npos);
+  o.name = "head";
+  o.width = 0;
+  o.height = 240;
+  EXPECT_NE(ErrorOf(o).find("must both be positive"), std::string::npos);
+  o.width = -320;
+  EXPECT_NE(ErrorOf(o).find("must both be positive"), std::string::npos);
+  o.width = 320;
+  o.frames = -1;
+  EXPECT_NE(ErrorOf(o).find("negative"), std::string::npos);
+  o.frames = 0;
+  o.reverse = true;
+  EXPECT_NE(ErrorOf(o).find("building scenario only"), std::string::npos);
+  o.reverse = false;
+  o.encoder_noise_scale = -1;
+  EXPECT_NE(ErrorOf(o).find(">= 0"), std::string::npos);
+  o.encoder_noise_scale = 1;
+  o.name = "eye-hand";
+  EXPECT_NE(ErrorOf(o).find("no images"), std::string::npos);
+}
+
+TEST(ScenarioOptions, ParsesImageSizes) {
+  EXPECT_EQ(ParseImageSize("320x240"), std::make_pair(320, 240));
+  EXPECT_EQ(ParseImageSize("640X480"), std::make_pair(640, 480));
+  for (const char* bad :
+       {"0x240", "320x0", "-3x4", "320", "x240", "320x", "axb", "320x240x3", "99999x2"}) {
+    EXPECT_THROW(ParseImageSize(bad), std::invalid_argument) << bad;
+  }
+}
+
+TEST(ScenarioOptions, IndexOutOfRangeIsAnError) {
+  ScenarioOptions o;
+  o.name = "head";
+  o.frames = 2;
+  o.width = 32;
+  o.height = 24;
+  const auto s = MakeScenario(o);
+  EXPECT_THROW(s->Render(2), std::out_of_range);
+  EXPECT_THROW(s->Render(-1), std::out_of_range);
+  EXPECT_NO_THROW(s->Render(1));
+}
+
+}  // namespace
+}  // namespace epmap::sim
