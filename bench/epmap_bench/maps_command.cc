@@ -223,8 +223,23 @@ struct Truth {
   bool has_pose = false;
   Eigen::Isometry2d T_start_gt = Eigen::Isometry2d::Identity();
   Eigen::Isometry2d T_gt_start = Eigen::Isometry2d::Identity();
-  std::vector<Segment2> walls;  // start frame
+  std::vector<Segment2> walls;      // start frame
+  std::vector<Segment2> furniture;  // start frame (gt_map/furniture.csv, when the dataset has it)
 };
+
+// gt_map/furniture.csv (an extension of epmap-sim): footprints of furniture, as walls.csv.
+std::vector<Segment2> ReadFurniture(const fs::path& root) {
+  std::vector<Segment2> out;
+  std::ifstream in(root / "mav0" / "gt_map" / "furniture.csv");
+  std::string line;
+  while (std::getline(in, line)) {
+    double x1, y1, x2, y2;
+    if (std::sscanf(line.c_str(), "%lf,%lf,%lf,%lf", &x1, &y1, &x2, &y2) == 4) {
+      out.push_back({{x1, y1}, {x2, y2}});
+    }
+  }
+  return out;
+}
 
 Truth MakeTruth(const Prepared& p) {
   Truth t;
@@ -240,6 +255,9 @@ Truth MakeTruth(const Prepared& p) {
   for (const auto& w : d.walls) {
     t.walls.push_back(
         {t.T_start_gt * Eigen::Vector2d(w.x1, w.y1), t.T_start_gt * Eigen::Vector2d(w.x2, w.y2)});
+  }
+  for (const auto& f : ReadFurniture(d.root)) {
+    t.furniture.push_back({t.T_start_gt * f.a, t.T_start_gt * f.b});
   }
   return t;
 }
@@ -472,14 +490,24 @@ cv::Mat PmapPicture(const epmap::perceptual_map::PerceptualMap& m, const Truth& 
                      static_cast<int>((hi.y() - p.y()) * scale));
   };
   for (const auto& w : truth.walls) cv::line(img, px(w.a), px(w.b), cv::Scalar(190, 190, 190), 3);
+  for (const auto& f : truth.furniture) {
+    cv::line(img, px(f.a), px(f.b), cv::Scalar(150, 200, 230), 2);
+  }
+  auto solid = truth.walls;
+  solid.insert(solid.end(), truth.furniture.begin(), truth.furniture.end());
   for (size_t i = 1; i < true_path.size(); ++i) {
     cv::line(img, px(true_path[i - 1]), px(true_path[i]), cv::Scalar(160, 160, 160), 1);
   }
   for (const auto& g : m.segments) {
     const bool kept = std::any_of(m.kept_segments.begin(), m.kept_segments.end(),
                                   [&](const auto& x) { return x.id == g.id; });
-    cv::line(img, px(g.a), px(g.b), kept ? cv::Scalar(0, 0, 170) : cv::Scalar(128, 128, 255), 1,
-             cv::LINE_AA);
+    // Magenta: farther than 1 m from every wall and piece of furniture (stray).
+    const bool stray =
+        !solid.empty() && epmap::mobile_mapping::CoveredShare({{g.a, g.b}}, solid, 1.0) < 0.5;
+    const cv::Scalar colour = stray  ? cv::Scalar(200, 0, 200)
+                              : kept ? cv::Scalar(0, 0, 170)
+                                     : cv::Scalar(128, 128, 255);
+    cv::line(img, px(g.a), px(g.b), colour, 1, cv::LINE_AA);
   }
   for (size_t i = 1; i < m.boundary.outer.size(); ++i) {
     cv::line(img, px(m.boundary.outer[i - 1]), px(m.boundary.outer[i]), cv::Scalar(0, 160, 0), 1);
@@ -673,6 +701,12 @@ int RunCommand(int argc, char** argv) {
         << ",\"stray_share_1m\":" << Num(stray) << ",\"stray_target\":0.15"
         << ",\"kept_wall_coverage_0p5m\":" << Num(cov_kept)
         << ",\"kept_stray_share_1m\":" << Num(stray_kept);
+      if (!truth.furniture.empty()) {
+        auto solid = truth.walls;
+        solid.insert(solid.end(), truth.furniture.begin(), truth.furniture.end());
+        j << ",\"stray_share_1m_walls_and_furniture\":"
+          << Num(1.0 - epmap::mobile_mapping::CoveredShare(segs, solid, 1.0));
+      }
     }
     if (!compare_path.empty()) {
       const OtherMap other = ReadPmap(compare_path);
@@ -694,39 +728,56 @@ int RunCommand(int argc, char** argv) {
     }
     j << "}";
 
-    const auto grid_score = [&](const epmap::occupancy::GridExport& g) {
-      const auto s = epmap::mobile_mapping::ScoreGrid(g, truth.walls);
+    const auto grid_score_against = [&](const epmap::occupancy::GridExport& g,
+                                        const std::vector<Segment2>& solid) {
+      const auto s = epmap::mobile_mapping::ScoreGrid(g, solid);
       std::ostringstream o;
       o << "{\"iou\":" << Num(s.iou) << ",\"iou_observed\":" << Num(s.iou_observed)
         << ",\"occupied_cells\":" << s.occupied << ",\"wall_cells\":" << s.wall_cells
         << ",\"wall_cells_observed\":" << s.wall_cells_observed << "}";
       return o.str();
     };
+    const auto grid_score = [&](const epmap::occupancy::GridExport& g) {
+      return grid_score_against(g, truth.walls);
+    };
     j << ",\"occupancy\":{\"resolution_m\":" << Num(grid_export.resolution_m, 3)
       << ",\"width\":" << grid_export.width << ",\"height\":" << grid_export.height
       << ",\"layers\":" << grid_export.layer_count;
     if (!truth.walls.empty())
       j << ",\"corrected\":" << grid_score(grid_export) << ",\"iou_target\":0.5";
+    if (!truth.furniture.empty()) {
+      // The same against walls and the furniture footprints the dataset lists.
+      auto solid = truth.walls;
+      solid.insert(solid.end(), truth.furniture.begin(), truth.furniture.end());
+      j << ",\"corrected_walls_and_furniture\":" << grid_score_against(grid_export, solid);
+    }
 
     std::string variants_json;
     if (!no_variants) {
       struct Variant {
         const char* name;
-        bool heading, correlation;
+        bool heading, correlation, place_by_pose;
       };
       std::ostringstream v;
-      for (const Variant var : {Variant{"no_heading_correction", false, true},
-                                Variant{"odometry_only", false, false}}) {
+      for (const Variant var : {Variant{"no_heading_correction", false, true, false},
+                                Variant{"odometry_only", false, false, false},
+                                Variant{"perceptual_map_placed_by_pose", true, true, true}}) {
         auto vp = params;
         vp.visual_heading = var.heading;
         vp.map_correlation = var.correlation;
+        vp.perceptual.place_by_pose = var.place_by_pose;
         const RunResult r = Run(p, vp, false);
         const auto& rl = r.maps->poses.back();
         const PoseErrors e = FinalErrors(p, truth, rl.T_world_base, rl.stamp_ns);
         const auto g = r.maps->grid.Export();
-        if (!truth.walls.empty()) j << ",\"" << var.name << "\":" << grid_score(g);
-        cv::imwrite((fs::path(out_dir) / (std::string("grid_") + var.name + ".png")).string(),
-                    GridPicture(g, truth, r.maps->poses));
+        if (!var.place_by_pose) {
+          if (!truth.walls.empty()) j << ",\"" << var.name << "\":" << grid_score(g);
+          cv::imwrite((fs::path(out_dir) / (std::string("grid_") + var.name + ".png")).string(),
+                      GridPicture(g, truth, r.maps->poses));
+        } else {
+          cv::imwrite((fs::path(out_dir) / "pmap_placed_by_pose.png").string(),
+                      PmapPicture(r.maps->perceptual, truth, true_path));
+        }
         v << (v.tellp() > 0 ? "," : "") << "{\"name\":\"" << var.name
           << "\",\"final_heading_error_deg\":" << Num(e.heading_deg, 3)
           << ",\"final_position_error_m\":" << Num(e.position_m, 3);

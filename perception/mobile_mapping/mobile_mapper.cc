@@ -43,6 +43,8 @@ void MobileMapperParams::Validate() const {
   if (!(correlation_search_m >= 0) || !(correlation_min_gain >= 0)) {
     throw std::invalid_argument("mobile mapper: correlation search and gain must be >= 0");
   }
+  if (!(head_still_rad >= 0))
+    throw std::invalid_argument("mobile mapper: head_still_rad must be >= 0");
   if (view_min_key_frames < 1) {
     throw std::invalid_argument("mobile mapper: view_min_key_frames must be >= 1");
   }
@@ -143,8 +145,18 @@ KeyFrameReport MobileMapper::AddKeyFrame(const KeyFrame& f) {
     return report;
   }
 
-  // Measurements of this key frame (nothing in the maps changes yet).
-  localisation::KeyFrameFeatures features = tracker_.Detect(f.left, f.right, f.T_base_cam);
+  // Measurements of this key frame (nothing in the maps changes yet). While the head stands
+  // still, its encoder noise must not become heading noise: a camera pose that differs from
+  // the previous key frame's by less than head_still_rad is taken as the same.
+  Eigen::Isometry3d T_base_cam_heading = f.T_base_cam;
+  if (previous_features_) {
+    const Eigen::AngleAxisd change(previous_features_->T_base_cam.linear().transpose() *
+                                   f.T_base_cam.linear());
+    if (std::abs(change.angle()) < params_.head_still_rad) {
+      T_base_cam_heading = previous_features_->T_base_cam;
+    }
+  }
+  localisation::KeyFrameFeatures features = tracker_.Detect(f.left, f.right, T_base_cam_heading);
   report.features = features.features.size();
   const auto edges = perceptual_map::MatchEdgePoints(f.left, f.right, camera_, params_.edges);
   report.edge_points = edges.size();
@@ -156,7 +168,8 @@ KeyFrameReport MobileMapper::AddKeyFrame(const KeyFrame& f) {
     if (h >= params_.reference_min_height_m && h <= params_.reference_max_height_m) {
       frame.reference_points.emplace_back(p.x(), p.y());
     }
-    if (static_cast<int>(e.v) % params_.occupancy_edge_row_step == 0) {
+    if (static_cast<int>(e.v) % params_.occupancy_edge_row_step == 0 &&
+        e.slope <= params_.occupancy_edge_max_slope) {
       frame.points_base.push_back(p);
       frame.sigmas.push_back(localisation::DepthSigma(camera_, e.p_cam.z(),
                                                       params_.features.disparity_sigma_px,

@@ -64,18 +64,25 @@ struct MobileMapperParams {
 
   double floor_z_in_base_m = 0.0;  // height of the floor in the base frame (REP 105: 0)
   // Reference points of the perceptual map: edge points between these heights above the floor
-  // (floor texture and ceiling fixtures are not surfaces a 2-D map should hold).
-  double reference_min_height_m = 0.15;
+  // (floor texture and ceiling fixtures are not surfaces a 2-D map should hold; 6 cm keeps the
+  // top of skirting boards, the floor's own texture stays below it within the depth noise).
+  double reference_min_height_m = 0.06;
   double reference_max_height_m = 2.0;
   // Edge points fed to the occupancy grid: one row in this many along each vertical edge. They
   // stand for the paper's line features cut into parts of a fixed image-plane length.
   int occupancy_edge_row_step = 4;
+  // ... and only edges this close to vertical (|dI/dy| <= slope |dI/dx|): a slanted edge's
+  // disparity is less precise, which a 10 cm grid shows where a line map does not.
+  double occupancy_edge_max_slope = 1.0;
 
   bool visual_heading = true;  // paper 002, Sec. 3.3; off: the odometry's heading is kept
   // Fit only the rotation of a key-frame step, its translation taken from the odometry
   // (RegisterLorentzianRotation; registration.vertical_axis_only then fits the yaw alone). Off:
   // the paper's full rototranslation. See lorentzian_registration.h for why.
   bool step_translation_from_odometry = true;
+  // A head that turned less than this between two key frames is taken as still (joint encoder
+  // noise of ~0.02 degrees would otherwise add to every visual heading step while driving).
+  double head_still_rad = 0.002;
   bool map_correlation = true;  // paper 002, Sec. 4: translation by local/global correlation
   double correlation_search_m = 0.5;
   // A correlation shift is applied only when its peak beats the unshifted score by this share

@@ -89,7 +89,7 @@ std::vector<std::vector<RowEdge>> RowEdgesOfSmoothed(const cv::Mat& f, const Edg
       const float denom = a - 2.0F * m + b;
       float offset = denom < 0 ? 0.5F * (a - b) / denom : 0.0F;
       offset = std::clamp(offset, -0.5F, 0.5F);
-      out.push_back({static_cast<float>(c) + offset, x[c]});
+      out.push_back({static_cast<float>(c) + offset, x[c], std::abs(y[c]) / m});
     }
   }
   return rows;
@@ -211,6 +211,7 @@ std::vector<EdgePoint> MatchEdgePoints(const cv::Mat& left, const cv::Mat& right
       e.u = L[i].u;
       e.v = static_cast<float>(r);
       e.disparity = d;
+      e.slope = L[i].slope;
       e.p_cam = Triangulate(camera, e.u, e.v, d);
       if (e.p_cam.norm() > p.max_range_m) {
         ++s.rejected_range;

@@ -23,9 +23,11 @@ void ValidateCamera(const StereoCamera& camera);
 struct EdgeStereoParams {
   double blur_sigma_px = 0.8;  // Gaussian smoothing before the gradient (0 = none)
   double min_gradient = 8.0;   // |dI/dx| in grey levels per pixel for an edge point
-  // Only edges within atan(max_slope) of the image's vertical: a horizontal edge has no
-  // reliable disparity along the row (the same reasoning as paper 002, Sec. 3.2).
-  double max_slope = 1.0;  // |dI/dy| <= max_slope * |dI/dx|
+  // Only edges at least atan(1 / max_slope) from the image's horizontal: a horizontal edge has
+  // no reliable disparity along the row (the same reasoning as paper 002, Sec. 3.2). 3 keeps
+  // edges 18 degrees or more from horizontal: the base of a wall seen in perspective (skirting
+  // boards along a corridor) is often the only structure a plain wall shows.
+  double max_slope = 3.0;  // |dI/dy| <= max_slope * |dI/dx|
   double min_disparity_px = 0.5;
   double max_disparity_px = 64.0;
   int window_half_width = 3;  // matching window (2w+1) x (2h+1) around each edge point
@@ -41,6 +43,7 @@ struct EdgeStereoParams {
 struct EdgePoint {
   float u = 0, v = 0;     // sub-pixel column and row in the left image
   float disparity = 0;    // px, > 0
+  float slope = 0;        // |dI/dy| / |dI/dx| at the edge: 0 vertical, 1 at 45 degrees
   Eigen::Vector3d p_cam;  // metres in the rectified left camera frame (x right, y down, z fwd)
 };
 
@@ -54,8 +57,9 @@ struct EdgeStereoStats {
 
 // One image's edge points on one row, ordered by column.
 struct RowEdge {
-  float u = 0;   // sub-pixel column
-  float gx = 0;  // signed horizontal gradient at the edge (grey levels / px)
+  float u = 0;      // sub-pixel column
+  float gx = 0;     // signed horizontal gradient at the edge (grey levels / px)
+  float slope = 0;  // |dI/dy| / |dI/dx|
 };
 
 // Edge points of a grey image (CV_8UC1 or CV_32FC1), one vector per row: local maxima of

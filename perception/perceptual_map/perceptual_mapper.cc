@@ -201,7 +201,7 @@ void PerceptualMapper::Expand(ViewState* view, std::vector<MapSegment>* segments
         {k, a_first ? o.a : o.b, g.a, hi > 0 && lo / hi >= params_.anchor_length_agreement});
   }
 
-  if (common.empty()) {
+  if (common.empty() || params_.place_by_pose) {
     // No common object to triangulate from: the view is placed by the robot's motion from the
     // last map view (the situation the paper avoids by adding V_{n-1}, counted here).
     const MapView& last = (*views)[last_map_view];
@@ -232,7 +232,7 @@ void PerceptualMapper::Expand(ViewState* view, std::vector<MapSegment>* segments
     if (view->global_id[k] >= 0 && index.count(view->global_id[k])) continue;
     const auto& o = view->objects[k];
     Eigen::Vector2d a, b;
-    if (common.empty()) {
+    if (common.empty() || params_.place_by_pose) {
       a = record.T_map_base * o.a;
       b = record.T_map_base * o.b;
     } else {

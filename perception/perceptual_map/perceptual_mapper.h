@@ -33,6 +33,10 @@ struct PerceptualMapParams {
   // point is the same physical point).
   double anchor_length_agreement = 0.7;
   double anchor_search_m = 3.0;  // a better-agreeing anchor may be this much farther away
+  // Place new objects by the robot's pose estimate instead of triangulating them from common
+  // objects (III-C). Not the paper's model: a comparison for when the pose is trusted (e.g.
+  // corrected by paper 002's method).
+  bool place_by_pose = false;
   BoundaryParams boundary;
   void Validate() const;
 };

@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <numbers>
 #include <opencv2/imgproc.hpp>
 
 #include "perception/perceptual_map/edge_stereo.h"
@@ -70,6 +71,41 @@ TEST(EdgeStereo, BlankImagesGiveNoPointsAndBadInputIsRefused) {
   no_baseline.baseline_m = 0;
   EXPECT_THROW(perceptual_map::MatchEdgePoints(blank, blank, no_baseline, {}),
                std::invalid_argument);
+}
+
+// A straight edge 30 degrees from the horizontal (the base of a wall seen in perspective),
+// shifted by 6.4 px between the images: matched with the default slope limit (edges 18 degrees
+// or more from horizontal), not with a limit of 45 degrees.
+TEST(EdgeStereo, SlantedEdgesAreMatchedDownToEighteenDegrees) {
+  const auto render = [](double shift) {
+    cv::Mat img(120, 300, CV_8UC1);
+    const double cot = 1.0 / std::tan(30.0 * std::numbers::pi / 180.0);
+    for (int v = 0; v < img.rows; ++v) {
+      for (int u = 0; u < img.cols; ++u) {
+        // Area-sampled step: grey 60 left of the line x = 40 + cot * v + shift, 190 right.
+        double acc = 0;
+        for (int k = 0; k < 16; ++k) {
+          const double x = u + (k + 0.5) / 16 - 0.5;
+          acc += x < 40 + cot * v + shift ? 60 : 190;
+        }
+        img.at<uint8_t>(v, u) = static_cast<uint8_t>(acc / 16);
+      }
+    }
+    return img;
+  };
+  const cv::Mat left = render(0), right = render(-6.4);
+  const auto cam = testing::BumblebeeLikeCamera();
+  const auto points = perceptual_map::MatchEdgePoints(left, right, cam, {});
+  ASSERT_GT(points.size(), 50u);
+  double sum = 0;
+  for (const auto& p : points) {
+    EXPECT_NEAR(p.disparity, 6.4, 0.3);  // along the row, a slanted edge is less precise
+    sum += p.disparity;
+  }
+  EXPECT_NEAR(sum / static_cast<double>(points.size()), 6.4, 0.05);
+  perceptual_map::EdgeStereoParams steep;
+  steep.max_slope = 1.0;
+  EXPECT_TRUE(perceptual_map::MatchEdgePoints(left, right, cam, steep).empty());
 }
 
 TEST(EdgeStereo, SubPixelEdgeLocation) {
