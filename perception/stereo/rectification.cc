@@ -62,6 +62,7 @@ Rectifier::Rectifier(const CameraParameters& left, const CameraParameters& right
   geometry_ = {left.width, left.height, left.p[0],         left.p[5],
                left.p[2],  left.p[6],   std::abs(baseline)};
   identity_ = AlreadyRectified(left) && AlreadyRectified(right);
+  left_rotation_ = R(left);
   if (!identity_) {
     BuildMap(left, map_left_x_, map_left_y_);
     BuildMap(right, map_right_x_, map_right_y_);

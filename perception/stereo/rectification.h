@@ -43,11 +43,15 @@ class Rectifier {
 
   const RectifiedGeometry& geometry() const { return geometry_; }
   bool identity() const { return identity_; }
+  // R of the left camera: x_rect = R x_raw. The rectified left camera's pose in the raw one is
+  // [R^T | 0], which turns a raw camera pose (e.g. from kinematics) into the rectified one.
+  const cv::Matx33d& left_rotation() const { return left_rotation_; }
   bool valid() const { return geometry_.width > 0; }
 
  private:
   RectifiedGeometry geometry_;
   bool identity_ = false;
+  cv::Matx33d left_rotation_ = cv::Matx33d::eye();
   cv::Mat map_left_x_, map_left_y_, map_right_x_, map_right_y_;
 };
 

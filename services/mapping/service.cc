@@ -18,7 +18,16 @@ MappingService::MappingService(const ServiceConfig& config)
       queue_(config.queue_capacity),
       sensors_(counters_.rejected) {
   config_.Validate();
+  calibration_ = std::make_unique<CalibrationComponent>(config_, sensors_, counters_);
   pipeline_ = std::make_unique<Pipeline>(config_, queue_, sensors_, counters_, snapshots_);
+  pipeline_->AttachCalibration(&calibration_->active_models(), &calibration_->frame_tap(),
+                               config_.calibration.rectification_rebuild_deg);
+
+  // Everything an RPC may touch exists before the server starts: a GetStatus arriving while
+  // DDS ingest was still being created used to find it null (a crash at start-up).
+  pipeline_->Start();
+  ingest_ = std::make_unique<DdsIngest>(config_, queue_, sensors_, counters_);
+  ingest_->SetEyeHandCallback(calibration_->EyeHandSamplesCallback());
 
   map_service_ = std::make_unique<MapServiceImpl>(*this);
   grpc::EnableDefaultHealthCheckService(true);
@@ -29,15 +38,13 @@ MappingService::MappingService(const ServiceConfig& config)
   builder.SetMaxReceiveMessageSize(config_.max_message_mb << 20);
   builder.SetMaxSendMessageSize(config_.max_message_mb << 20);
   builder.RegisterService(map_service_.get());
+  builder.RegisterService(calibration_->grpc_service());
   server_ = builder.BuildAndStart();
   if (!server_ || port == 0) {
     throw std::runtime_error("cannot serve gRPC on " + config_.listen +
                              " (address in use or invalid?)");
   }
   bound_address_ = config_.listen.substr(0, config_.listen.rfind(':') + 1) + std::to_string(port);
-
-  pipeline_->Start();
-  ingest_ = std::make_unique<DdsIngest>(config_, queue_, sensors_, counters_);
   server_->GetHealthCheckService()->SetServingStatus(true);
   spdlog::info("epmapd serving gRPC on {} ; DDS domain {} ; mode {}", bound_address_,
                config_.domain, config_.mode);
@@ -51,11 +58,14 @@ void MappingService::Shutdown() {
   if (server_) {
     server_->GetHealthCheckService()->SetServingStatus(false);
     snapshots_.Close();  // wakes RPCs waiting for a newer frame
+    // Running calibration jobs end INTERRUPTED; their watchers see that and return.
+    if (calibration_) calibration_->Shutdown();
     server_->Shutdown(std::chrono::system_clock::now() + std::chrono::seconds(2));
   }
   ingest_.reset();  // no more DDS callbacks
   queue_.Close();
   if (pipeline_) pipeline_->Stop();
+  if (calibration_) calibration_->Shutdown();
   if (server_) server_->Wait();
   spdlog::info("epmapd stopped");
 }

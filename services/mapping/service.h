@@ -8,6 +8,7 @@
 #include <memory>
 #include <string>
 
+#include "services/mapping/calibration/calibration_component.h"
 #include "services/mapping/config/service_config.h"
 #include "services/mapping/ingest/bounded_queue.h"
 #include "services/mapping/ingest/dds_ingest.h"
@@ -38,6 +39,8 @@ class MappingService {
   DdsIngest& ingest() { return *ingest_; }
   Pipeline& pipeline() { return *pipeline_; }
   const BoundedQueue<StereoFrame>& queue() const { return queue_; }
+  // Calibration jobs, models and the active models the pipeline applies.
+  CalibrationComponent& calibration() { return *calibration_; }
   double uptime_s() const;
   bool shutting_down() const { return shutting_down_.load(); }
 
@@ -48,6 +51,7 @@ class MappingService {
   BoundedQueue<StereoFrame> queue_;
   SensorState sensors_;
   SnapshotStore snapshots_;
+  std::unique_ptr<CalibrationComponent> calibration_;
   std::unique_ptr<Pipeline> pipeline_;
   std::unique_ptr<DdsIngest> ingest_;
   std::unique_ptr<MapServiceImpl> map_service_;

@@ -27,11 +27,7 @@ class Epmapd {
     std::vector<std::string> args = {"--listen", address_, "--domain", std::to_string(domain)};
     args.insert(args.end(), extra_args.begin(), extra_args.end());
     process_ = std::make_unique<ChildProcess>(BinDir() / "epmapd", args, work_dir / "epmapd.log");
-    grpc::ChannelArguments channel_args;
-    channel_args.SetMaxReceiveMessageSize(256 << 20);
-    channel_ =
-        grpc::CreateCustomChannel(address_, grpc::InsecureChannelCredentials(), channel_args);
-    stub_ = v1::MapService::NewStub(channel_);
+    Connect();
   }
 
   // Waits until GetStatus answers; false if the process died or the time ran out.
@@ -42,6 +38,9 @@ class Epmapd {
       v1::ServiceStatus status;
       if (Status(&status).ok()) return true;
       std::this_thread::sleep_for(std::chrono::milliseconds(100));
+      // A new channel each attempt: one that failed while epmapd was starting sits in gRPC's
+      // reconnect backoff (1 s, then x1.6), which made this wait ~5 s.
+      Connect();
     }
     return false;
   }
@@ -71,6 +70,14 @@ class Epmapd {
       if (c.reason() == reason) return c.count();
     }
     return 0;
+  }
+
+  void Connect() {
+    grpc::ChannelArguments channel_args;
+    channel_args.SetMaxReceiveMessageSize(256 << 20);
+    channel_ =
+        grpc::CreateCustomChannel(address_, grpc::InsecureChannelCredentials(), channel_args);
+    stub_ = v1::MapService::NewStub(channel_);
   }
 
   const std::string& address() const { return address_; }

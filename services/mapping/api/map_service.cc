@@ -62,6 +62,9 @@ grpc::Status MapServiceImpl::GetStatus(grpc::ServerContext*, const v1::GetStatus
   out->set_recomputed_share_median(share.median);
   out->set_full_refreshes(pipeline.full_refreshes());
   AddCounters(pipeline.events().Snapshot(), out->mutable_events());
+  const auto& models = service_.calibration().active_models();
+  out->set_active_eye_hand_model(models.eye_hand_id());
+  out->set_active_stereo_model(models.stereo_id());
   return grpc::Status::OK;
 }
 

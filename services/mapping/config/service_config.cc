@@ -1,5 +1,7 @@
 #include "services/mapping/config/service_config.h"
 
+#include "perception/ep/ep_settings.h"
+
 #include <yaml-cpp/yaml.h>
 
 #include <fstream>
@@ -134,6 +136,25 @@ void Apply(const YAML::Node& root, ServiceConfig& c) {
     s.RejectUnknownKeys();
   }
   {
+    auto s = top.Sub("calibration");
+    s.Get("worker_threads", c.calibration.worker_threads);
+    s.Get("stereo_frames", c.calibration.stereo_frames);
+    s.GetMs("stereo_frame_timeout_ms", c.calibration.stereo_frame_timeout_ns);
+    s.GetMs("stereo_frame_interval_ms", c.calibration.stereo_frame_interval_ns);
+    s.Get("stereo_min_success_share", c.calibration.stereo_min_success_share);
+    s.Get("baseline_direction_prior_sigma_deg", c.calibration.baseline_direction_prior_sigma_deg);
+    s.Get("rectification_rebuild_deg", c.calibration.rectification_rebuild_deg);
+    s.RejectUnknownKeys();
+  }
+  {
+    auto s = top.Sub("ep");
+    s.Get("enabled", c.ep.enabled);
+    s.Get("pose_source", c.ep.pose_source);
+    s.Get("learned_model", c.ep.learned_model);
+    s.Get("params", c.ep.params);
+    s.RejectUnknownKeys();
+  }
+  {
     auto s = top.Sub("log");
     s.Get("level", c.log_level);
     s.RejectUnknownKeys();
@@ -159,6 +180,39 @@ void ServiceConfig::Validate() const {
                          camera.fy <= 0 || camera.baseline_m <= 0)) {
     bad("robot.camera: width, height, fx, fy and baseline_m must be positive when enabled");
   }
+  {
+    const auto& k = calibration;
+    if (k.worker_threads < 1 || k.worker_threads > 16) {
+      bad("calibration.worker_threads must be 1..16");
+    }
+    if (k.stereo_frames < 1 || k.stereo_frames > 1000) {
+      bad("calibration.stereo_frames must be 1..1000");
+    }
+    if (k.stereo_frame_timeout_ns <= 0) bad("calibration.stereo_frame_timeout_ms must be positive");
+    if (k.stereo_frame_interval_ns < 0) bad("calibration.stereo_frame_interval_ms must be >= 0");
+    if (!(k.stereo_min_success_share > 0 && k.stereo_min_success_share <= 1)) {
+      bad("calibration.stereo_min_success_share must be in (0, 1]");
+    }
+    if (!(k.baseline_direction_prior_sigma_deg >= 0)) {
+      bad("calibration.baseline_direction_prior_sigma_deg must be >= 0 (0 = off)");
+    }
+    if (!(k.rectification_rebuild_deg > 0)) {
+      bad("calibration.rectification_rebuild_deg must be > 0");
+    }
+  }
+  static const std::set<std::string> kPoseSources{"auto", "urdf", "learned", "odometry", "fixed"};
+  if (!kPoseSources.count(ep.pose_source)) {
+    bad("ep.pose_source must be auto, urdf, learned, odometry or fixed");
+  }
+  if (ep.pose_source == "learned" && ep.learned_model.empty()) {
+    bad("ep.pose_source learned needs ep.learned_model (a file saved by epmap-bench ep "
+        "--internal-model learned --out DIR)");
+  }
+  try {
+    MakeEpParams(*this).Validate();
+  } catch (const std::invalid_argument& e) {
+    bad(std::string("ep.params: ") + e.what());
+  }
   static const std::set<std::string> kLevels{"trace", "debug", "info", "warn", "error"};
   if (!kLevels.count(log_level)) bad("log.level must be trace, debug, info, warn or error");
   try {
@@ -181,6 +235,18 @@ void ApplyYaml(const std::string& yaml_text, ServiceConfig& config) {
   }
   if (root.IsNull()) return;
   Apply(root, config);
+}
+
+ep::EpParams MakeEpParams(const ServiceConfig& config) {
+  ep::EpParams params;
+  for (const auto& [key, value] : config.ep.params) {
+    if (key.rfind("sgbm.", 0) == 0) {
+      throw std::invalid_argument("'" + key + "': SGBM is configured in the stereo section");
+    }
+    ep::SetEpParam(&params, key, value);
+  }
+  params.sgbm = config.sgbm;
+  return params;
 }
 
 ServiceConfig LoadServiceConfig(const std::filesystem::path& yaml_path) {
@@ -252,6 +318,27 @@ std::string ToYaml(const ServiceConfig& c) {
   out << YAML::EndMap;
   out << YAML::Key << "state" << YAML::Value << YAML::BeginMap << YAML::Key << "dir" << YAML::Value
       << c.state_dir << YAML::EndMap;
+  out << YAML::Key << "calibration" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "worker_threads" << YAML::Value << c.calibration.worker_threads;
+  out << YAML::Key << "stereo_frames" << YAML::Value << c.calibration.stereo_frames;
+  out << YAML::Key << "stereo_frame_timeout_ms" << YAML::Value
+      << c.calibration.stereo_frame_timeout_ns / 1e6;
+  out << YAML::Key << "stereo_frame_interval_ms" << YAML::Value
+      << c.calibration.stereo_frame_interval_ns / 1e6;
+  out << YAML::Key << "stereo_min_success_share" << YAML::Value
+      << c.calibration.stereo_min_success_share;
+  out << YAML::Key << "baseline_direction_prior_sigma_deg" << YAML::Value
+      << c.calibration.baseline_direction_prior_sigma_deg;
+  out << YAML::Key << "rectification_rebuild_deg" << YAML::Value
+      << c.calibration.rectification_rebuild_deg;
+  out << YAML::EndMap;
+  out << YAML::Key << "ep" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "enabled" << YAML::Value << c.ep.enabled;
+  out << YAML::Key << "pose_source" << YAML::Value << c.ep.pose_source;
+  out << YAML::Key << "learned_model" << YAML::Value << c.ep.learned_model;
+  out << YAML::Key << "params" << YAML::Value << YAML::BeginMap;
+  for (const auto& [key, value] : c.ep.params) out << YAML::Key << key << YAML::Value << value;
+  out << YAML::EndMap << YAML::EndMap;
   out << YAML::Key << "log" << YAML::Value << YAML::BeginMap << YAML::Key << "level" << YAML::Value
       << c.log_level << YAML::EndMap;
   out << YAML::EndMap;

@@ -5,21 +5,55 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <map>
 #include <string>
 #include <vector>
 
 #include "common/dds/topics.h"
+#include "perception/ep/expected_perception.h"
 #include "perception/stereo/sgbm.h"
 
 namespace epmap::mapping {
 
 // Where the rectification comes from when no CameraInfo has arrived (or when told to ignore it).
 struct ConfiguredCamera {
-  bool enabled = false;     // true: use these values instead of waiting for CameraInfo
+  bool enabled = false;  // true: use these values instead of waiting for CameraInfo
   int width = 0;
   int height = 0;
   double fx = 0, fy = 0, cx = 0, cy = 0;
-  double baseline_m = 0;    // the pair is taken as already rectified
+  double baseline_m = 0;  // the pair is taken as already rectified
+};
+
+// The calibration service (services/mapping/calibration/README.md).
+struct CalibrationSettings {
+  int worker_threads = 1;                            // jobs run on these, never on gRPC threads
+  uint32_t stereo_frames = 10;                       // frames a stereo job uses by default
+  int64_t stereo_frame_timeout_ns = 10'000'000'000;  // no frame for this long: the job fails
+  int64_t stereo_frame_interval_ns = 200'000'000;    // frames used at least this far apart
+  double stereo_min_success_share = 0.5;             // share of frames that must self-calibrate
+  // Optional Gaussian prior on the baseline direction (perception/calibration README); 0 = off,
+  // the paper's procedure (data only).
+  double baseline_direction_prior_sigma_deg = 0.0;
+  // With a stereo model active, the rectification maps are rebuilt when the frame's extrinsics
+  // differ from the maps' by more than this (rotation or baseline direction).
+  double rectification_rebuild_deg = 0.01;
+};
+
+// The expected-perception disparity map (perception/ep/README.md).
+struct EpSettings {
+  bool enabled =
+      true;  // false: full-frame SGBM on every frame (the baseline EP is measured against)
+  // Where the camera pose comes from (paper 000's internal model): urdf (forward kinematics of
+  // robot.urdf), learned (the paper's MLP, loaded from learned_model), odometry (the base's
+  // odometry composed with the URDF's base->camera chain), fixed (a static rig), or auto: urdf
+  // when a URDF is given, else fixed.
+  std::string pose_source = "auto";
+  // pose_source learned: a model saved by `epmap-bench ep --internal-model learned --out DIR`
+  // (DIR/learned_model.yml).
+  std::string learned_model;
+  // Any perception/ep parameter by name (`epmap-bench ep --list-params` lists them), e.g.
+  // "comparator.threshold_grey": "12". The SGBM parameters come from the stereo section.
+  std::map<std::string, std::string> params;
 };
 
 struct ServiceConfig {
@@ -30,32 +64,42 @@ struct ServiceConfig {
   // --- DDS ingest ---
   uint32_t domain = 0;
   dds::TopicNames topics;
-  bool shared_memory_transport = true;     // 16 MiB segment for same-host publishers
-  uint32_t max_image_bytes = 32u << 20;    // larger samples are refused before decoding
-  int64_t pair_tolerance_ns = 2'000'000;   // left/right stamps closer than this form a pair
-  int64_t pair_timeout_ns = 500'000'000;   // an image without partner for this long is dropped
+  bool shared_memory_transport = true;          // 16 MiB segment for same-host publishers
+  uint32_t max_image_bytes = 32u << 20;         // larger samples are refused before decoding
+  int64_t pair_tolerance_ns = 2'000'000;        // left/right stamps closer than this form a pair
+  int64_t pair_timeout_ns = 500'000'000;        // an image without partner for this long is dropped
   int64_t camera_info_wait_ns = 1'000'000'000;  // how long a frame may wait for CameraInfo
-  int64_t joints_max_gap_ns = 200'000'000; // joint readings must bracket the image this closely
-  int64_t joints_wait_ns = 100'000'000;    // wait this long for a reading after the image stamp
-  size_t queue_capacity = 16;              // frames between ingest and pipeline (~0.5 s at 30 Hz)
+  int64_t joints_max_gap_ns = 200'000'000;  // joint readings must bracket the image this closely
+  int64_t joints_wait_ns = 100'000'000;     // wait this long for a reading after the image stamp
+  size_t queue_capacity = 16;               // frames between ingest and pipeline (~0.5 s at 30 Hz)
 
   // --- robot ---
-  std::string mode = "auto";               // auto | head | static | mobile-base
-  std::string urdf;                        // kinematic chain (links cam0_optical, cam1_optical)
+  std::string mode = "auto";  // auto | head | static | mobile-base
+  std::string urdf;           // kinematic chain (links cam0_optical, cam1_optical)
   ConfiguredCamera camera;
 
   // --- stereo ---
-  stereo::SgbmParams sgbm;                 // defaults: ../shared/data README's reference values
+  stereo::SgbmParams sgbm;  // defaults: ../shared/data README's reference values
 
   // --- durable state ---
-  std::string state_dir;                   // empty: no durable state (calibration disabled)
+  std::string state_dir;  // empty: no durable state (calibration disabled)
+
+  // --- calibration service ---
+  CalibrationSettings calibration;
+
+  // --- expected perception ---
+  EpSettings ep;
 
   // --- logging ---
-  std::string log_level = "info";          // trace | debug | info | warn | error
+  std::string log_level = "info";  // trace | debug | info | warn | error
 
   // Throws std::invalid_argument naming the first bad setting.
   void Validate() const;
 };
+
+// The EP parameters: the defaults, overridden by ep.params, with the stereo section's SGBM.
+// Throws std::invalid_argument naming an unknown key or a value that does not parse.
+ep::EpParams MakeEpParams(const ServiceConfig& config);
 
 // Loads YAML over the defaults; unknown keys are an error (a typo must not pass silently).
 ServiceConfig LoadServiceConfig(const std::filesystem::path& yaml_path);

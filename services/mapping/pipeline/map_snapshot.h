@@ -12,7 +12,9 @@
 #include <optional>
 #include <vector>
 
+#include "perception/ep/expected_perception.h"
 #include "perception/stereo/rectification.h"
+#include "services/mapping/pipeline/unexpected_events.h"
 
 namespace epmap::mapping {
 
@@ -22,11 +24,18 @@ struct MapSnapshot {
   stereo::RectifiedGeometry camera;
   int min_disparity = 0;
   int num_disparities = 0;
-  cv::Mat disparity;       // CV_32FC1 px, NaN unknown (rectified cam0)
-  cv::Mat left_rectified;  // the image the disparity belongs to
+  cv::Mat disparity;                             // CV_32FC1 px, NaN unknown (rectified cam0)
+  cv::Mat left_rectified;                        // the image the disparity belongs to
   std::optional<Eigen::Isometry3d> T_base_cam0;  // when a kinematic/odometry pose is known
   double recomputed_share = 1.0;  // share of pixels whose disparity was computed this frame
   double valid_share = 0.0;       // share of pixels with a finite disparity
+  // The expected-perception result of this frame (null when EP is disabled): predicted image,
+  // E, C, A on the comparison grid, the unexpected and recompute masks.
+  std::shared_ptr<const ep::EpResult> ep;
+  int grid_step = 1;  // the comparison grid's step (ep->error etc. are size / grid_step)
+  // What moved on its own (null when EP is disabled), with centroids in the base frame as the
+  // active eye-hand model corrects them.
+  std::shared_ptr<const UnexpectedFrame> unexpected;
 };
 
 // Holds the newest snapshot; readers may wait for one newer than a stamp or frame.
@@ -50,9 +59,8 @@ class SnapshotStore {
   std::shared_ptr<const MapSnapshot> WaitNewer(uint64_t after_frame,
                                                std::chrono::milliseconds timeout) const {
     std::unique_lock lock(mutex_);
-    changed_.wait_for(lock, timeout, [&] {
-      return closed_ || (latest_ && latest_->frame_index > after_frame);
-    });
+    changed_.wait_for(lock, timeout,
+                      [&] { return closed_ || (latest_ && latest_->frame_index > after_frame); });
     return latest_;
   }
 

@@ -59,15 +59,19 @@ Pipeline::Pipeline(const ServiceConfig& config, BoundedQueue<StereoFrame>& queue
       sensors_(sensors),
       counters_(counters),
       snapshots_(snapshots),
-      matcher_(config.sgbm) {
+      matcher_(config.sgbm),
+      ep_params_(MakeEpParams(config)) {
   if (!config.urdf.empty()) {
     chain_ = kinematics::UrdfChain::FromFile(config.urdf);
     spdlog::info("kinematic chain from {}: root '{}', joints [{}]", config.urdf,
                  chain_->root_link(), fmt::join(chain_->joint_names(), ", "));
   }
+  SetUpPoseSource();
 }
 
-Pipeline::~Pipeline() { Stop(); }
+Pipeline::~Pipeline() {
+  Stop();
+}
 
 void Pipeline::Start() {
   stop_ = false;
@@ -78,12 +82,13 @@ void Pipeline::Stop() {
   stop_ = true;
   sensors_.Interrupt();
   if (thread_.joinable()) thread_.join();
+  unexpected_hub_.Close();
 }
 
 std::string Pipeline::mode() const {
   if (config_.mode != "auto") return config_.mode;
-  if (chain_) return "head";
   if (sensors_.has_odometry()) return "mobile-base";
+  if (chain_) return "head";
   return "static";
 }
 
@@ -102,6 +107,9 @@ void Pipeline::Run() {
 }
 
 const stereo::Rectifier* Pipeline::CurrentRectifier(const StereoFrame& frame) {
+  if (const auto model = active_models_ ? active_models_->stereo() : nullptr) {
+    return StereoModelRectifier(frame, *model);
+  }
   if (config_.camera.enabled) {
     if (!rectifier_) {
       const auto [l, r] = FromConfig(config_.camera);
@@ -146,23 +154,9 @@ const stereo::Rectifier* Pipeline::CurrentRectifier(const StereoFrame& frame) {
   return &*rectifier_;
 }
 
-std::optional<Eigen::Isometry3d> Pipeline::PoseAt(int64_t stamp_ns) {
-  std::string reason;
-  if (chain_) {
-    const auto joints = sensors_.JointsAt(stamp_ns, chain_->joint_names(),
-                                          config_.joints_max_gap_ns,
-                                          std::chrono::nanoseconds(config_.joints_wait_ns), &reason);
-    if (!joints) {
-      events_.Increment("pose_unavailable:" + reason);
-      return std::nullopt;
-    }
-    return chain_->Cam0Pose(*joints);
-  }
-  return std::nullopt;
-}
-
 void Pipeline::Process(StereoFrame& frame) {
   const auto t_start = Clock::now();
+  if (frame_tap_) frame_tap_->Offer(frame);  // raw frames for stereo-extrinsics jobs
   const stereo::Rectifier* rectifier = CurrentRectifier(frame);
   if (!rectifier) return;
 
@@ -172,13 +166,9 @@ void Pipeline::Process(StereoFrame& frame) {
   stage_ms_.Add("rectify", MsSince(t0));
 
   t0 = Clock::now();
-  const auto pose = PoseAt(frame.stamp_ns);
+  std::string pose_reason;
+  const auto pose = PoseAt(frame.stamp_ns, &pose_reason);
   stage_ms_.Add("pose", MsSince(t0));
-
-  t0 = Clock::now();
-  cv::Mat disparity = matcher_.Compute(left, right);
-  stage_ms_.Add("sgbm", MsSince(t0));
-  full_refreshes_++;
 
   auto snapshot = std::make_shared<MapSnapshot>();
   snapshot->frame_index = processed_.load() + 1;
@@ -186,16 +176,30 @@ void Pipeline::Process(StereoFrame& frame) {
   snapshot->camera = rectifier->geometry();
   snapshot->min_disparity = config_.sgbm.min_disparity;
   snapshot->num_disparities = config_.sgbm.num_disparities;
-  snapshot->valid_share = ValidShare(disparity);
-  snapshot->disparity = std::move(disparity);
   snapshot->left_rectified = left;
-  snapshot->T_base_cam0 = pose;
-  snapshot->recomputed_share = 1.0;
+  if (config_.ep.enabled) {
+    RunExpectedPerception(frame, *rectifier, left, right, pose, pose_reason, *snapshot);
+    if (!snapshot->ep) return;  // refused, counted
+  } else {
+    if (!pose && EffectivePoseSource() != "fixed") {
+      events_.Increment("pose_unavailable:" + pose_reason);
+    }
+    t0 = Clock::now();
+    snapshot->disparity = matcher_.Compute(left, right);
+    stage_ms_.Add("sgbm", MsSince(t0));
+    full_refreshes_++;
+    snapshot->T_base_cam0 = pose;
+    snapshot->recomputed_share = 1.0;
+  }
+  snapshot->valid_share = ValidShare(snapshot->disparity);
   stage_ms_.Add("total", MsSince(t_start));
+  const double recomputed = snapshot->recomputed_share;
+  const auto unexpected = snapshot->unexpected;
   snapshots_.Publish(std::move(snapshot));
+  if (unexpected) unexpected_hub_.Publish(unexpected);
   processed_++;
   figures_.Add("latency_ms", MsSince(frame.assembled));
-  figures_.Add("recomputed_share", 1.0);
+  figures_.Add("recomputed_share", recomputed);
 }
 
 }  // namespace epmap::mapping

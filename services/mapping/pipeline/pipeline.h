@@ -8,15 +8,21 @@
 #include <optional>
 #include <thread>
 
+#include "perception/ep/expected_perception.h"
+#include "perception/internal_model/pose_source.h"
 #include "perception/kinematics/urdf_chain.h"
 #include "perception/stereo/rectification.h"
 #include "perception/stereo/sgbm.h"
+#include "services/mapping/calibration/active_models.h"
+#include "services/mapping/calibration/frame_tap.h"
+#include "services/mapping/calibration/model_rectification.h"
 #include "services/mapping/config/service_config.h"
 #include "services/mapping/ingest/bounded_queue.h"
 #include "services/mapping/ingest/dds_ingest.h"
 #include "services/mapping/ingest/sensor_state.h"
 #include "services/mapping/pipeline/map_snapshot.h"
 #include "services/mapping/pipeline/stage_stats.h"
+#include "services/mapping/pipeline/unexpected_events.h"
 
 namespace epmap::mapping {
 
@@ -36,13 +42,35 @@ class Pipeline {
   uint64_t full_refreshes() const { return full_refreshes_.load(); }
   CounterSet& events() { return events_; }
   std::string mode() const;
+  // Every frame's unexpected regions, for WatchUnexpected streams.
+  UnexpectedEventHub& unexpected_hub() { return unexpected_hub_; }
+  // The internal model in use: urdf, learned, odometry or fixed.
+  std::string EffectivePoseSource() const;
+
+  // Calibration (services/mapping/calibration; pipeline_calibration.cc): the models the
+  // pipeline applies (an active stereo-extrinsics model replaces CameraInfo's R, P) and the tap
+  // through which stereo-extrinsics jobs see raw frames. Call before Start().
+  void AttachCalibration(const ActiveModels* models, RawFrameTap* tap,
+                         double rectification_rebuild_deg);
 
  private:
   void Run();
   void Process(StereoFrame& frame);
   // The rectifier for the current calibration; nullptr (and a counted rejection) if none.
   const stereo::Rectifier* CurrentRectifier(const StereoFrame& frame);
-  std::optional<Eigen::Isometry3d> PoseAt(int64_t stamp_ns);
+  // The raw (unrectified) cam0 pose in the base frame at a stamp, from the internal model;
+  // nullopt with *reason when its inputs are missing (pipeline_ep.cc).
+  std::optional<Eigen::Isometry3d> PoseAt(int64_t stamp_ns, std::string* reason);
+  void SetUpPoseSource();
+  // The EP map of this frame into the snapshot (pipeline_ep.cc).
+  void RunExpectedPerception(const StereoFrame& frame, const stereo::Rectifier& rectifier,
+                             const cv::Mat& left, const cv::Mat& right,
+                             const std::optional<Eigen::Isometry3d>& raw_pose,
+                             const std::string& pose_reason, MapSnapshot& snapshot);
+  // The rectifier under the active stereo model, or nullptr (with a counted rejection); only
+  // called when a stereo model is active (pipeline_calibration.cc).
+  const stereo::Rectifier* StereoModelRectifier(const StereoFrame& frame,
+                                                const ActiveModels::Stereo& model);
 
   const ServiceConfig config_;
   BoundedQueue<StereoFrame>& queue_;
@@ -51,9 +79,19 @@ class Pipeline {
   SnapshotStore& snapshots_;
 
   std::optional<kinematics::UrdfChain> chain_;
-  stereo::SgbmMatcher matcher_;
+  std::string pose_source_;  // as configured (auto resolves per frame)
+  std::optional<internal_model::LearnedPoseSource> learned_;
+  std::vector<std::string> learned_inputs_;
+  stereo::SgbmMatcher matcher_;  // full-frame SGBM when EP is disabled
+  ep::EpParams ep_params_;
+  std::unique_ptr<ep::ExpectedPerception> ep_;
+  UnexpectedEventHub unexpected_hub_;
   std::optional<stereo::Rectifier> rectifier_;
   uint64_t rectifier_version_ = ~0ull;
+
+  const ActiveModels* active_models_ = nullptr;
+  RawFrameTap* frame_tap_ = nullptr;
+  std::optional<ModelRectification> model_rectification_;
 
   RollingStats stage_ms_;
   RollingStats figures_;

@@ -54,7 +54,10 @@ TEST_P(StereoPairE2E, ServedDisparityIsAsGoodAsDirectSgbm) {
   std::printf("%s: bad-2 served %.4f, direct SGBM %.4f (unknown counted as wrong)\n",
               GetParam().c_str(), served_score.bad_counting_unknown(),
               direct_score.bad_counting_unknown());
-  EXPECT_LE(served_score.bad_counting_unknown(), direct_score.bad_counting_unknown() + 1e-9);
+  // The first frame is computed whole with the same SGBM; the EP map then leaves SGBM's blind
+  // margin columns unknown (it could never re-measure them on predicted frames), which costs at
+  // most a few tenths of a point here. Anything more means the served map is not SGBM's.
+  EXPECT_LE(served_score.bad_counting_unknown(), direct_score.bad_counting_unknown() + 0.003);
   EXPECT_GT(served_score.gt_pixels, 1000u);
 
   epmapd.process().Signal(SIGTERM);

@@ -1,0 +1,63 @@
+#include "perception/ep/comparator/regions.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <opencv2/imgproc.hpp>
+#include <stdexcept>
+
+namespace epmap::ep {
+
+std::vector<Region> LabelRegions(const cv::Mat& mask, const cv::Mat& disparity,
+                                 const stereo::RectifiedGeometry& camera,
+                                 const Eigen::Isometry3d& T_base_cam0) {
+  if (mask.type() != CV_8UC1) throw std::invalid_argument("regions: mask must be CV_8UC1");
+  if (disparity.type() != CV_32FC1 || disparity.size() != mask.size()) {
+    throw std::invalid_argument("regions: disparity must be CV_32FC1 of the mask's size");
+  }
+  cv::Mat labels, stats, centroids;
+  const int n = cv::connectedComponentsWithStats(mask, labels, stats, centroids, 8, CV_32S);
+  std::vector<Region> regions(static_cast<size_t>(std::max(n - 1, 0)));
+  std::vector<Eigen::Vector3d> sum_point(regions.size(), Eigen::Vector3d::Zero());
+  std::vector<double> sum_disp(regions.size(), 0.0);
+  const double fb = camera.fx * camera.baseline_m;
+  const bool metric = fb > 0 && camera.fy > 0;
+  for (int v = 0; v < mask.rows; ++v) {
+    const int* l = labels.ptr<int>(v);
+    const float* d = disparity.ptr<float>(v);
+    for (int u = 0; u < mask.cols; ++u) {
+      if (l[u] == 0 || !(d[u] > 0) || !std::isfinite(d[u])) continue;
+      const auto i = static_cast<size_t>(l[u] - 1);
+      sum_disp[i] += d[u];
+      ++regions[i].disparity_pixels;
+      if (metric) {
+        const double z = fb / d[u];
+        sum_point[i] +=
+            Eigen::Vector3d((u - camera.cx) / camera.fx * z, (v - camera.cy) / camera.fy * z, z);
+      }
+    }
+  }
+  for (size_t i = 0; i < regions.size(); ++i) {
+    Region& r = regions[i];
+    const int label = static_cast<int>(i) + 1;
+    r.box =
+        cv::Rect(stats.at<int>(label, cv::CC_STAT_LEFT), stats.at<int>(label, cv::CC_STAT_TOP),
+                 stats.at<int>(label, cv::CC_STAT_WIDTH), stats.at<int>(label, cv::CC_STAT_HEIGHT));
+    r.area_px = stats.at<int>(label, cv::CC_STAT_AREA);
+    if (r.disparity_pixels > 0) {
+      r.mean_disparity_px = sum_disp[i] / r.disparity_pixels;
+      if (metric) {
+        r.has_centroid = true;
+        r.centroid_cam0 = sum_point[i] / r.disparity_pixels;
+        r.centroid_base = T_base_cam0 * r.centroid_cam0;
+      }
+    } else {
+      r.mean_disparity_px = std::numeric_limits<double>::quiet_NaN();
+    }
+  }
+  std::stable_sort(regions.begin(), regions.end(),
+                   [](const Region& a, const Region& b) { return a.area_px > b.area_px; });
+  return regions;
+}
+
+}  // namespace epmap::ep

@@ -1,0 +1,156 @@
+#include "perception/ep/comparator/visual_comparator.h"
+
+#include <algorithm>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+#include <stdexcept>
+#include <vector>
+
+namespace epmap::ep {
+
+void ComparatorParams::Validate() const {
+  if (!(lambda >= 0)) throw std::invalid_argument("comparator: lambda must be >= 0");
+  if (!(alpha >= 0)) throw std::invalid_argument("comparator: alpha must be >= 0");
+  if (!(threshold_grey > 0)) throw std::invalid_argument("comparator: threshold must be > 0");
+  if (!(unexpected_weight >= 0 && unexpected_weight <= 1)) {
+    throw std::invalid_argument("comparator: unexpected_weight must be in [0, 1]");
+  }
+  if (open_radius_px < 0 || close_radius_px < 0 || min_region_area_px < 0) {
+    throw std::invalid_argument("comparator: radii and minimum area must be >= 0");
+  }
+}
+
+std::pair<double, double> FitGainOffset(const cv::Mat& predicted, const cv::Mat& valid,
+                                        const cv::Mat& actual) {
+  constexpr int kStep = 4;
+  std::vector<float> p, a;
+  p.reserve(static_cast<size_t>(predicted.total() / (kStep * kStep)));
+  a.reserve(p.capacity());
+  for (int v = 0; v < predicted.rows; v += kStep) {
+    const float* pr = predicted.ptr<float>(v);
+    const uint8_t* va = valid.ptr<uint8_t>(v);
+    const uint8_t* ac = actual.ptr<uint8_t>(v);
+    for (int u = 0; u < predicted.cols; u += kStep) {
+      // Saturated pixels carry no exposure information.
+      if (va[u] && ac[u] > 2 && ac[u] < 253) {
+        p.push_back(pr[u]);
+        a.push_back(ac[u]);
+      }
+    }
+  }
+  double gain = 1, offset = 0;
+  double max_residual = 1e30;
+  for (int pass = 0; pass < 2; ++pass) {
+    double n = 0, sp = 0, sa = 0, spp = 0, spa = 0;
+    for (size_t i = 0; i < p.size(); ++i) {
+      if (std::abs(a[i] - (gain * p[i] + offset)) > max_residual) continue;
+      n += 1;
+      sp += p[i];
+      sa += a[i];
+      spp += static_cast<double>(p[i]) * p[i];
+      spa += static_cast<double>(p[i]) * a[i];
+    }
+    const double det = n * spp - sp * sp;
+    if (n < 100 || det <= 1e-9 * n * n) return {1.0, 0.0};
+    const double g = (n * spa - sp * sa) / det;
+    const double o = (sa - g * sp) / n;
+    if (!(g > 0.5 && g < 2.0) || !(std::abs(o) < 64.0)) return {1.0, 0.0};
+    gain = g;
+    offset = o;
+    double r2 = 0;
+    for (size_t i = 0; i < p.size(); ++i) r2 += std::pow(a[i] - (gain * p[i] + offset), 2);
+    max_residual = std::max(3.0 * std::sqrt(r2 / static_cast<double>(p.size())), 4.0);
+  }
+  return {gain, offset};
+}
+
+cv::Mat RemoveSpecks(const cv::Mat& mask, int open_radius_px, int min_area_px,
+                     int close_radius_px) {
+  cv::Mat out;
+  if (open_radius_px > 0) {
+    const cv::Mat k = cv::getStructuringElement(
+        cv::MORPH_RECT, cv::Size(2 * open_radius_px + 1, 2 * open_radius_px + 1));
+    cv::morphologyEx(mask, out, cv::MORPH_OPEN, k);
+  } else {
+    out = mask.clone();
+  }
+  if (close_radius_px > 0) {
+    const cv::Mat k = cv::getStructuringElement(
+        cv::MORPH_RECT, cv::Size(2 * close_radius_px + 1, 2 * close_radius_px + 1));
+    cv::morphologyEx(out, out, cv::MORPH_CLOSE, k);
+  }
+  if (min_area_px > 1) {
+    cv::Mat labels, stats, centroids;
+    const int n = cv::connectedComponentsWithStats(out, labels, stats, centroids, 8, CV_32S);
+    std::vector<uint8_t> keep(static_cast<size_t>(n), 0);
+    bool any_dropped = false;
+    for (int i = 1; i < n; ++i) {
+      keep[static_cast<size_t>(i)] = stats.at<int>(i, cv::CC_STAT_AREA) >= min_area_px ? 255 : 0;
+      any_dropped |= keep[static_cast<size_t>(i)] == 0;
+    }
+    if (any_dropped) {
+      for (int v = 0; v < out.rows; ++v) {
+        const int* l = labels.ptr<int>(v);
+        uint8_t* o = out.ptr<uint8_t>(v);
+        for (int u = 0; u < out.cols; ++u) o[u] = keep[static_cast<size_t>(l[u])];
+      }
+    }
+  }
+  return out;
+}
+
+Comparison Compare(const cv::Mat& predicted, const cv::Mat& valid,
+                   const cv::Mat& predicted_accumulated, const cv::Mat& actual,
+                   const ComparatorParams& params) {
+  params.Validate();
+  const cv::Size size = actual.size();
+  if (actual.type() != CV_8UC1) throw std::invalid_argument("comparator: L must be CV_8UC1");
+  if (predicted.type() != CV_32FC1 || predicted.size() != size ||
+      predicted_accumulated.type() != CV_32FC1 || predicted_accumulated.size() != size ||
+      valid.type() != CV_8UC1 || valid.size() != size) {
+    throw std::invalid_argument("comparator: L_-, C_- (CV_32F) and valid (CV_8U) must match L");
+  }
+  Comparison out;
+  if (params.compensate_exposure) {
+    std::tie(out.gain, out.offset) = FitGainOffset(predicted, valid, actual);
+  }
+  cv::Mat actual_f;
+  actual.convertTo(actual_f, CV_32F);
+  cv::Mat compensated;
+  predicted.convertTo(compensated, CV_32F, out.gain, out.offset);
+  // E = |L_- - L| (Sec. IV-A), only where the prediction exists.
+  cv::absdiff(compensated, actual_f, out.error);
+  const cv::Mat invalid = valid == 0;
+  out.error.setTo(0, invalid);
+  // A = E exp(-alpha (C_-)^2) (Sec. IV-A), with the propagated history C_-.
+  cv::Mat attenuation;
+  cv::multiply(predicted_accumulated, predicted_accumulated, attenuation, -params.alpha);
+  cv::exp(attenuation, attenuation);
+  cv::multiply(out.error, attenuation, out.attenuated);
+  // Unexpected: A above the threshold (Sec. IV-A), specks removed.
+  const cv::Mat above = out.attenuated > params.threshold_grey;
+  out.flagged =
+      RemoveSpecks(above, params.open_radius_px, params.min_region_area_px, params.close_radius_px);
+  // C = (E + lambda C_-) / (lambda + 1) (Sec. IV-A); no history where nothing was predicted.
+  cv::addWeighted(out.error, 1.0 / (params.lambda + 1.0), predicted_accumulated,
+                  params.lambda / (params.lambda + 1.0), 0.0, out.accumulated);
+  out.accumulated.setTo(0, invalid);
+  // Every pixel above the threshold (specks included: a speck removed from the output is still
+  // an unexpected error, not predictable noise) keeps its history unchanged.
+  if (params.unexpected_weight < 1.0) {
+    // C = (w E + lambda C_-) / (w + lambda) where the error is unexpected (w = 1: the paper).
+    cv::Mat weighted;
+    const double w = params.unexpected_weight;
+    cv::addWeighted(out.error, w / (w + params.lambda), predicted_accumulated,
+                    params.lambda / (w + params.lambda), 0.0, weighted);
+    weighted.copyTo(out.accumulated, above);
+  }
+  out.valid_pixels = cv::countNonZero(valid);
+  if (out.valid_pixels > 0) {
+    out.mean_error = cv::mean(out.error, valid)[0];
+    out.mean_attenuated = cv::mean(out.attenuated, valid)[0];
+  }
+  return out;
+}
+
+}  // namespace epmap::ep

@@ -1,0 +1,518 @@
+#include "perception/ep/expected_perception.h"
+
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <opencv2/core/utility.hpp>
+#include <opencv2/imgproc.hpp>
+#include <stdexcept>
+#include <string>
+
+#include "perception/ep/generator/disparity_fill.h"
+
+namespace epmap::ep {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double MsSince(Clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+cv::Mat ToGrey(const cv::Mat& image, const char* which) {
+  if (image.type() == CV_8UC1) return image;
+  cv::Mat grey;
+  if (image.type() == CV_8UC3) {
+    cv::cvtColor(image, grey, cv::COLOR_BGR2GRAY);
+  } else if (image.type() == CV_8UC4) {
+    cv::cvtColor(image, grey, cv::COLOR_BGRA2GRAY);
+  } else {
+    throw std::invalid_argument(std::string("EP: the ") + which +
+                                " image must be 8-bit grey, BGR or BGRA");
+  }
+  return grey;
+}
+
+void CheckPose(const Eigen::Isometry3d& T) {
+  if (!T.matrix().allFinite()) throw std::invalid_argument("EP: T_base_cam0 is not finite");
+  const Eigen::Matrix3d R = T.linear();
+  if ((R.transpose() * R - Eigen::Matrix3d::Identity()).norm() > 1e-6 ||
+      std::abs(R.determinant() - 1.0) > 1e-6) {
+    throw std::invalid_argument("EP: T_base_cam0's rotation is not orthonormal and right-handed");
+  }
+}
+
+// Disparities at or below this give no point (too far to move meaningfully).
+constexpr float kMinPointDisparity = 0.25F;
+
+// Runs of `mask` pixels starting at an image edge line and going inwards: along rows from
+// column `start` (step +1 or -1), or along columns from row `start`. Returns each line's run
+// length in `lengths` and the strip's thickness: the 75th percentile of the run lengths over
+// all lines (a strip along this edge makes most lines' runs equally long; a strip along a
+// perpendicular edge makes a few lines' runs very long, and must not count).
+int EdgeRuns(const cv::Mat& mask, bool along_rows, int start, int step, std::vector<int>* lengths) {
+  const int W = mask.cols, H = mask.rows;
+  const int lines = along_rows ? H : W;
+  lengths->assign(static_cast<size_t>(lines), 0);
+  for (int i = 0; i < lines; ++i) {
+    int n = 0;
+    for (int j = start;; j += step, ++n) {
+      const int u = along_rows ? j : i, v = along_rows ? i : j;
+      if (u < 0 || v < 0 || u >= W || v >= H || !mask.at<uint8_t>(v, u)) break;
+    }
+    (*lengths)[static_cast<size_t>(i)] = n;
+  }
+  std::vector<int> sorted = *lengths;
+  auto q = sorted.begin() + static_cast<std::ptrdiff_t>(3 * sorted.size() / 4);
+  std::nth_element(sorted.begin(), q, sorted.end());
+  return *q;
+}
+
+// Every step-th pixel of every step-th row: the comparison grid of an image.
+cv::Mat Decimate(const cv::Mat& image, int step) {
+  if (step == 1) return image;
+  const cv::Size grid((image.cols + step - 1) / step, (image.rows + step - 1) / step);
+  cv::Mat out(grid, image.type());
+  const size_t elem = image.elemSize();
+  for (int i = 0; i < grid.height; ++i) {
+    const uint8_t* src = image.ptr<uint8_t>(i * step);
+    uint8_t* dst = out.ptr<uint8_t>(i);
+    for (int j = 0; j < grid.width; ++j) {
+      std::copy_n(src + static_cast<size_t>(j * step) * elem, elem, dst + j * elem);
+    }
+  }
+  return out;
+}
+
+// A mask of the comparison grid back at full resolution (each grid pixel covers step x step).
+cv::Mat Upsample(const cv::Mat& grid_mask, const cv::Size& size, int step) {
+  if (step == 1) return grid_mask;
+  cv::Mat out(size, CV_8U);
+  for (int v = 0; v < size.height; ++v) {
+    const uint8_t* src = grid_mask.ptr<uint8_t>(v / step);
+    uint8_t* dst = out.ptr<uint8_t>(v);
+    for (int u = 0; u < size.width; ++u) dst[u] = src[u / step];
+  }
+  return out;
+}
+
+// The comparator's parameters for the comparison grid: its sizes are given in full-resolution
+// pixels.
+ComparatorParams ForGrid(ComparatorParams p, int step) {
+  const auto scale = [&](int r) { return r > 0 ? std::max(1, (r + step / 2) / step) : 0; };
+  p.open_radius_px = scale(p.open_radius_px);
+  p.close_radius_px = scale(p.close_radius_px);
+  p.min_region_area_px = p.min_region_area_px / (step * step);
+  return p;
+}
+
+// Sets the columns outside [first, last] of `image` to `value`.
+void BlindMargins(int first, int last, cv::Mat* image, double value) {
+  const int w = image->cols;
+  if (first > 0) (*image)(cv::Rect(0, 0, std::min(first, w), image->rows)).setTo(value);
+  if (last + 1 < w) {
+    const int x = std::max(last + 1, 0);
+    (*image)(cv::Rect(x, 0, w - x, image->rows)).setTo(value);
+  }
+}
+
+}  // namespace
+
+const char* ToString(FrameMode mode) {
+  switch (mode) {
+    case FrameMode::kFirst:
+      return "first";
+    case FrameMode::kPredicted:
+      return "predicted";
+    case FrameMode::kRefreshScheduled:
+      return "refresh_scheduled";
+    case FrameMode::kRefreshShare:
+      return "refresh_share";
+    case FrameMode::kPoseJump:
+      return "pose_jump";
+  }
+  return "unknown";
+}
+
+void EpParams::Validate() const {
+  prediction.Validate();
+  comparator.Validate();
+  stereo_check.Validate();
+  sgbm.Validate();
+  roi.Validate();
+  if (refresh.every_n_frames < 0) throw std::invalid_argument("EP: every_n_frames must be >= 0");
+  if (!(refresh.max_recompute_share > 0)) {
+    throw std::invalid_argument("EP: max_recompute_share must be > 0 (>= 1 disables it)");
+  }
+  if (!(max_rotation_step_rad > 0) || !(max_translation_step_m > 0)) {
+    throw std::invalid_argument("EP: the pose jump bounds must be > 0");
+  }
+  if (recompute_margin_px < 0) throw std::invalid_argument("EP: recompute_margin_px must be >= 0");
+  if (border_batch_px < 0) throw std::invalid_argument("EP: border_batch_px must be >= 0");
+}
+
+ExpectedPerception::ExpectedPerception(const stereo::RectifiedGeometry& camera,
+                                       const EpParams& params)
+    : camera_(camera),
+      params_(params),
+      stereo_(params.sgbm, params.roi),
+      grid_comparator_(ForGrid(params.comparator, params.prediction.image_step)) {
+  if (camera.width <= 0 || camera.height <= 0 || !(camera.fx > 0) || !(camera.fy > 0) ||
+      !(camera.baseline_m > 0) || !std::isfinite(camera.cx) || !std::isfinite(camera.cy)) {
+    throw std::invalid_argument("EP: the camera needs a positive size, focal lengths and baseline");
+  }
+  params_.Validate();
+}
+
+void ExpectedPerception::Reset() {
+  has_state_ = false;
+  state_ = MapState{};
+  frame_index_ = 0;
+  frames_since_full_ = 0;
+  refresh_requested_ = false;
+}
+
+std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_in,
+                                                            const cv::Mat& right_in,
+                                                            const Eigen::Isometry3d& T_base_cam0,
+                                                            int64_t stamp_ns) {
+  const auto t_start = Clock::now();
+  // Validate everything before touching the state.
+  const cv::Size size(camera_.width, camera_.height);
+  if (left_in.size() != size || right_in.size() != size) {
+    throw std::invalid_argument("EP: images must be " + std::to_string(size.width) + "x" +
+                                std::to_string(size.height) + " (the camera's size)");
+  }
+  const cv::Mat left = ToGrey(left_in, "left");
+  const cv::Mat right = ToGrey(right_in, "right");
+  // SGBM matches the images as the cameras delivered them (colour when they are colour, as
+  // full-frame SGBM would); the comparator works on brightness.
+  const bool colour = left_in.type() == CV_8UC3 && right_in.type() == CV_8UC3;
+  const cv::Mat& stereo_left = colour ? left_in : left;
+  const cv::Mat& stereo_right = colour ? right_in : right;
+  CheckPose(T_base_cam0);
+  if (has_state_ && stamp_ns <= last_stamp_ns_) {
+    throw std::invalid_argument("EP: stamp " + std::to_string(stamp_ns) +
+                                " is not after the previous frame's " +
+                                std::to_string(last_stamp_ns_));
+  }
+
+  const int first_column = stereo_.first_matchable_column();
+  const int last_column = stereo_.last_matchable_column(size.width);
+  auto res = std::make_shared<EpResult>();
+  res->stamp_ns = stamp_ns;
+  res->frame_index = frame_index_;
+  res->T_base_cam0 = T_base_cam0;
+  const double n_pixels = static_cast<double>(size.area());
+
+  // 1-2. Predict and compare, unless there is nothing to predict from or the motion is not
+  // trusted.
+  FrameMode mode = FrameMode::kFirst;
+  const int step = params_.prediction.image_step;
+  Prediction pred;
+  Comparison cmp;
+  cv::Mat flagged;    // the comparator's unexpected regions, at full resolution
+  cv::Mat deferred;   // thin border strips left for a later frame
+  cv::Mat uncertain;  // recomputed regions whose disparity may be anything
+  if (has_state_) {
+    const Eigen::Isometry3d T_cur_prev = T_base_cam0.inverse() * last_T_base_cam0_;
+    const double angle = Eigen::AngleAxisd(T_cur_prev.linear()).angle();
+    if (angle > params_.max_rotation_step_rad ||
+        T_cur_prev.translation().norm() > params_.max_translation_step_m) {
+      mode = FrameMode::kPoseJump;
+    } else {
+      mode = FrameMode::kPredicted;
+      auto t0 = Clock::now();
+      pred = Predict(state_, T_cur_prev, camera_, params_.prediction, &scratch_);
+      res->timings.predict_ms = MsSince(t0);
+      t0 = Clock::now();
+      cmp = Compare(pred.image, pred.image_valid, pred.accumulated, Decimate(left, step),
+                    grid_comparator_);
+      flagged = Upsample(cmp.flagged, size, step);
+      if (params_.stereo_check.enabled) {
+        res->stereo_inconsistent =
+            CheckStereo(left, right, pred.disparity, params_.stereo_check).inconsistent;
+      }
+      res->timings.compare_ms = MsSince(t0);
+      res->compared = true;
+    }
+  }
+
+  // Plan what SGBM recomputes: unexpected regions grown by a margin, and holes.
+  auto t0 = Clock::now();
+  cv::Mat recompute;
+  if (res->compared) {
+    if (params_.recompute_margin_px > 0) {
+      const int k = 2 * params_.recompute_margin_px + 1;
+      cv::dilate(flagged, recompute, cv::getStructuringElement(cv::MORPH_RECT, {k, k}));
+    } else {
+      recompute = flagged.clone();
+    }
+    // Where the geometry itself is in question (something moved, or the pair disagrees), SGBM
+    // searches the full range; elsewhere the prediction says what disparities to expect.
+    uncertain = recompute.clone();
+    recompute |= pred.holes;
+    if (!res->stereo_inconsistent.empty()) {
+      recompute |= res->stereo_inconsistent;
+      uncertain |= res->stereo_inconsistent;
+    }
+    if (params_.remeasure_dynamic) {
+      // Where something moved on its own last frame, the map's geometry is not to be trusted:
+      // re-measured whether or not E notices (the thing may have left a low-texture place).
+      cv::Mat dynamic;
+      cv::bitwise_and(pred.flags, cv::Scalar(kDynamic), dynamic);
+      if (params_.recompute_margin_px > 0 && cv::countNonZero(dynamic) > 0) {
+        const int k = 2 * params_.recompute_margin_px + 1;
+        cv::dilate(dynamic, dynamic, cv::getStructuringElement(cv::MORPH_RECT, {k, k}));
+      }
+      recompute.setTo(255, dynamic);
+      uncertain.setTo(255, dynamic);
+    }
+    // New content along the borders is recomputed once the strip it forms is thick enough to
+    // be worth its SGBM box (the box's padding would dwarf a strip of a pixel or two); until
+    // then it stays unknown (without points: a hole again next frame, and the strip grows).
+    if (params_.border_batch_px > 1) {
+      const struct {
+        bool rows;
+        int start, step;
+      } sides[] = {{true, first_column, 1},
+                   {true, last_column, -1},
+                   {false, 0, 1},
+                   {false, size.height - 1, -1}};
+      std::vector<int> lengths;
+      for (const auto& side : sides) {
+        if (EdgeRuns(pred.holes, side.rows, side.start, side.step, &lengths) >=
+            params_.border_batch_px) {
+          continue;  // thick enough: recomputed now
+        }
+        for (size_t i = 0; i < lengths.size(); ++i) {
+          for (int n = 0; n < lengths[i]; ++n) {
+            const int j = side.start + side.step * n;
+            const int u = side.rows ? j : static_cast<int>(i);
+            const int v = side.rows ? static_cast<int>(i) : j;
+            if (u < first_column || u > last_column) continue;  // filled there, never deferred
+            if (deferred.empty()) deferred = cv::Mat::zeros(size, CV_8U);
+            deferred.at<uint8_t>(v, u) = 255;
+            recompute.at<uint8_t>(v, u) = 0;
+          }
+        }
+      }
+    }
+    // Content that comes out of SGBM's blind margins has no measurement, only a fill: it is
+    // measured once there is as much of it as a strip of border_batch_px columns down the whole
+    // image (its box reaches back over the whole search range: a thinner strip would pay that
+    // padding for little); until then it stays unknown.
+    {
+      cv::Mat emerged;
+      cv::bitwise_and(pred.flags, cv::Scalar(kUnseen), emerged);
+      BlindMargins(first_column, last_column, &emerged, 0);
+      const int count = cv::countNonZero(emerged);
+      if (count > 0 && count >= std::max(params_.border_batch_px, 1) * size.height) {
+        recompute.setTo(255, emerged);
+      }
+    }
+    // Rolling refresh: one band of rows per frame, so that every pixel is measured afresh at
+    // least every rolling_period_frames frames whatever the comparator saw (a wrong disparity
+    // on a surface without texture shows neither in E nor in the stereo check).
+    if (params_.refresh.rolling_period_frames > 0) {
+      const int period = params_.refresh.rolling_period_frames;
+      const int rows = (size.height + period - 1) / period;
+      const int band = static_cast<int>(frame_index_ % static_cast<uint64_t>(period));
+      const int y0 = band * rows;
+      if (y0 < size.height) {
+        recompute(cv::Rect(0, y0, size.width, std::min(rows, size.height - y0))).setTo(255);
+      }
+    }
+    // ... and pixels still inside them are never worth a box: SGBM cannot match them.
+    BlindMargins(first_column, last_column, &recompute, 0);
+    const double share = cv::countNonZero(recompute) / n_pixels;
+    const bool scheduled =
+        refresh_requested_ ||
+        (params_.refresh.every_n_frames > 0 &&
+         frames_since_full_ + 1 >= static_cast<uint64_t>(params_.refresh.every_n_frames));
+    if (scheduled) {
+      mode = FrameMode::kRefreshScheduled;
+    } else if (share > params_.refresh.max_recompute_share) {
+      mode = FrameMode::kRefreshShare;
+    }
+  }
+  res->timings.plan_ms = MsSince(t0);
+
+  // 3. Disparity update: SGBM where needed (or everywhere), fused into the prediction.
+  t0 = Clock::now();
+  if (mode == FrameMode::kPredicted) {
+    res->disparity = pred.disparity.clone();
+    cv::Mat expected;
+    if (params_.narrow_search) {
+      expected = pred.geometry.clone();
+      expected.setTo(std::numeric_limits<float>::quiet_NaN(), uncertain);
+    }
+    const RoiStereoStats stats =
+        stereo_.ComputeMasked(stereo_left, stereo_right, recompute, res->disparity, expected);
+    res->recompute = recompute;
+    res->recomputed_share = static_cast<double>(stats.target_pixels) / n_pixels;
+    res->stereo_area_share = static_cast<double>(stats.computed_pixels) / n_pixels;
+    res->sgbm_boxes = stats.boxes;
+  } else {
+    res->disparity = stereo_.ComputeFull(stereo_left, stereo_right);
+    // SGBM's values in its blind margins are not kept (see RoiStereo::last_matchable_column);
+    // on predicted frames the margins are never recomputed, so the map keeps what it had there.
+    BlindMargins(first_column, last_column, &res->disparity,
+                 std::numeric_limits<double>::quiet_NaN());
+    res->recompute = cv::Mat(size, CV_8U, cv::Scalar(255));
+    res->recomputed_share = 1.0;
+    res->stereo_area_share = 1.0;
+    res->sgbm_boxes = 1;
+  }
+  res->timings.stereo_ms = MsSince(t0);
+
+  // The motion detector's output: flagged pixels, without those whose fresh disparity shows
+  // the background a moving thing uncovered (on the comparison grid, then at full resolution).
+  t0 = Clock::now();
+  if (res->compared) {
+    cv::Mat unexpected = cmp.flagged.clone();
+    if (params_.uncovered_margin_px > 0) {
+      const float margin = static_cast<float>(params_.uncovered_margin_px);
+      for (int i = 0; i < unexpected.rows; ++i) {
+        uint8_t* u8 = unexpected.ptr<uint8_t>(i);
+        const float* fresh = res->disparity.ptr<float>(i * step);
+        const float* predicted = pred.geometry.ptr<float>(i * step);
+        for (int j = 0; j < unexpected.cols; ++j) {
+          // False for NaN.
+          if (u8[j] && fresh[j * step] < predicted[j * step] - margin) u8[j] = 0;
+        }
+      }
+      unexpected = RemoveSpecks(unexpected, 0, grid_comparator_.min_region_area_px);
+    }
+    res->unexpected = Upsample(unexpected, size, step);
+    res->predicted_left = pred.image;
+    res->error = cmp.error;
+    res->attenuated = cmp.attenuated;
+    res->accumulated = cmp.accumulated;
+    res->holes = pred.holes;
+    res->mean_error = cmp.mean_error;
+    res->mean_attenuated = cmp.mean_attenuated;
+    res->exposure_gain = cmp.gain;
+    res->exposure_offset = cmp.offset;
+    res->hole_share = cv::countNonZero(pred.holes) / n_pixels;
+    res->non_finite_rejected = pred.non_finite_rejected;
+  } else {
+    res->unexpected = cv::Mat::zeros(size, CV_8U);
+    // No history survives a full restart.
+    res->accumulated = cv::Mat::zeros(ComparisonGrid(camera_, step), CV_32F);
+  }
+  res->unexpected_share = cv::countNonZero(res->unexpected) / n_pixels;
+  res->regions = LabelRegions(res->unexpected, res->disparity, camera_, T_base_cam0);
+  res->timings.plan_ms += MsSince(t0);
+
+  // The state for the next frame. The result's images are never written again: the next
+  // frame allocates its own.
+  t0 = Clock::now();
+  // Points: kept exactly where the prediction stands (no rounding to pixel centres), fresh from
+  // the disparity where SGBM ran, and from the fill of SGBM's gaps where nothing is known, except
+  // on a deferred border strip: it stays without points, a hole again next frame, until it is
+  // thick enough to be worth its SGBM box.
+  // Flags: measured where the map has a disparity, dynamic where something moved on its own,
+  // unseen where nothing was measured and SGBM never looked (its blind margins, unseen points
+  // carried along and not recomputed, deferred strips). One pass over the rows.
+  const bool predicted = mode == FrameMode::kPredicted;
+  state_.points = predicted ? pred.points  // owned by this frame's prediction, not the result
+                            : cv::Mat(size, CV_32FC3);
+  state_.flags.create(size, CV_8U);  // a fresh buffer: the prediction's flags are read below
+  if (predicted && state_.flags.data == pred.flags.data) state_.flags = cv::Mat(size, CV_8U);
+  const float fb = static_cast<float>(camera_.fx * camera_.baseline_m);
+  cv::parallel_for_(cv::Range(0, size.height), [&](const cv::Range& rows) {
+    std::vector<float> fill(static_cast<size_t>(size.width));
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    for (int v = rows.start; v < rows.end; ++v) {
+      auto* p = state_.points.ptr<cv::Vec3f>(v);
+      const float* fresh = res->disparity.ptr<float>(v);
+      FillUnknownDisparityRow(fresh, fill.data(), size.width);
+      const uint8_t* rec = res->recompute.ptr<uint8_t>(v);
+      const uint8_t* moved = res->unexpected.ptr<uint8_t>(v);
+      const uint8_t* carried = predicted ? pred.flags.ptr<uint8_t>(v) : nullptr;
+      const uint8_t* later = deferred.empty() ? nullptr : deferred.ptr<uint8_t>(v);
+      uint8_t* flags = state_.flags.ptr<uint8_t>(v);
+      const float ray_y = static_cast<float>((v - camera_.cy) / camera_.fy);
+      for (int u = 0; u < size.width; ++u) {
+        const bool measured = fresh[u] > 0;  // false for NaN
+        uint8_t f = measured ? kMeasured : 0;
+        if (moved[u]) f |= kDynamic;
+        if (std::isnan(fresh[u]) && (u < first_column || u > last_column || (later && later[u]) ||
+                                     (carried && (carried[u] & kUnseen) && !rec[u]))) {
+          f |= kUnseen;
+        }
+        flags[u] = f;
+        float d;
+        if (!predicted || rec[u]) {
+          d = fresh[u] > kMinPointDisparity ? fresh[u] : fill[static_cast<size_t>(u)];
+        } else if (!(p[u][2] > 0) && !(later && later[u])) {
+          d = fill[static_cast<size_t>(u)];
+        } else {
+          continue;  // the predicted point stays
+        }
+        if (d > kMinPointDisparity) {  // false for NaN
+          const float z = fb / d;
+          p[u] = cv::Vec3f(static_cast<float>((u - camera_.cx) / camera_.fx) * z, ray_y * z, z);
+        } else {
+          p[u] = cv::Vec3f(nan, nan, nan);
+        }
+      }
+    }
+  });
+  state_.image = left.clone();
+  state_.accumulated = res->accumulated;
+  if (predicted && params_.history_reset_px > 0) {
+    // Errors explained by a wrong map are not history: forget them where the map changed (on
+    // the comparison grid, where C lives).
+    const float margin = static_cast<float>(params_.history_reset_px);
+    cv::Mat reset;
+    for (int i = 0; i < res->accumulated.rows; ++i) {
+      const int v = i * step;
+      const uint8_t* rec = res->recompute.ptr<uint8_t>(v);
+      const float* fresh = res->disparity.ptr<float>(v);
+      const float* predicted_d = pred.geometry.ptr<float>(v);
+      for (int j = 0; j < res->accumulated.cols; ++j) {
+        const int u = j * step;
+        if (rec[u] && std::abs(fresh[u] - predicted_d[u]) > margin) {  // false for NaN
+          if (reset.empty()) reset = res->accumulated.clone();  // the result's C stays as published
+          reset.at<float>(i, j) = 0.0F;
+        }
+      }
+    }
+    if (!reset.empty()) state_.accumulated = reset;
+  }
+  res->timings.fuse_ms = MsSince(t0);
+
+  res->mode = mode;
+  ++counters_.frames;
+  switch (mode) {
+    case FrameMode::kFirst:
+      ++counters_.full_first;
+      break;
+    case FrameMode::kPredicted:
+      ++counters_.predicted;
+      break;
+    case FrameMode::kRefreshScheduled:
+      ++counters_.full_scheduled;
+      break;
+    case FrameMode::kRefreshShare:
+      ++counters_.full_share;
+      break;
+    case FrameMode::kPoseJump:
+      ++counters_.pose_jumps;
+      break;
+  }
+  counters_.non_finite_rejected += static_cast<uint64_t>(res->non_finite_rejected);
+  frames_since_full_ = mode == FrameMode::kPredicted ? frames_since_full_ + 1 : 0;
+  if (mode != FrameMode::kPredicted) refresh_requested_ = false;
+  has_state_ = true;
+  last_stamp_ns_ = stamp_ns;
+  last_T_base_cam0_ = T_base_cam0;
+  ++frame_index_;
+  res->timings.total_ms = MsSince(t_start);
+  return res;
+}
+
+}  // namespace epmap::ep

@@ -1,0 +1,499 @@
+#include "perception/ep/generator/ep_generator.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <limits>
+#include <opencv2/core/utility.hpp>
+#include <opencv2/imgproc.hpp>
+#include <stdexcept>
+#include <vector>
+
+namespace epmap::ep {
+
+namespace {
+
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+
+void CheckCamera(const stereo::RectifiedGeometry& camera) {
+  if (camera.width <= 0 || camera.height <= 0 || !(camera.fx > 0) || !(camera.fy > 0) ||
+      !(camera.baseline_m > 0)) {
+    throw std::invalid_argument("EP generator: camera geometry is not set (size, focal, baseline)");
+  }
+}
+
+void CheckInputs(const MapState& s, const stereo::RectifiedGeometry& camera,
+                 const Eigen::Isometry3d& T, const PredictionParams& params) {
+  CheckCamera(camera);
+  params.Validate();
+  const cv::Size size(camera.width, camera.height);
+  if (s.points.type() != CV_32FC3 || s.points.size() != size) {
+    throw std::invalid_argument("EP generator: points must be CV_32FC3 of the camera's size");
+  }
+  if (s.flags.type() != CV_8UC1 || s.flags.size() != size) {
+    throw std::invalid_argument("EP generator: flags must be CV_8UC1 of the camera's size");
+  }
+  if (s.image.type() != CV_8UC1 || s.image.size() != size) {
+    throw std::invalid_argument("EP generator: image must be CV_8UC1 of the camera's size");
+  }
+  if (s.accumulated.type() != CV_32FC1 ||
+      s.accumulated.size() != ComparisonGrid(camera, params.image_step)) {
+    throw std::invalid_argument(
+        "EP generator: accumulated must be CV_32FC1 of the comparison grid's size");
+  }
+  if (!T.matrix().allFinite()) throw std::invalid_argument("EP generator: motion is not finite");
+}
+
+// The working state of one prediction: the moved points, their flags and their disparities
+// (0 = empty), all of one frame's size.
+struct Splat {
+  int W = 0, H = 0;
+  float fx = 0, fy = 0, cx = 0, cy = 0, fb = 0;
+  cv::Mat points;     // CV_32FC3
+  cv::Mat flags;      // CV_8U
+  cv::Mat disparity;  // CV_32F, fb / z of the point held, 0 = empty
+
+  void Set(int u, int v, float x, float y, float z, uint8_t f) {
+    float* p = points.ptr<float>(v) + 3 * u;
+    p[0] = x;
+    p[1] = y;
+    p[2] = z;
+    flags.at<uint8_t>(v, u) = f;
+    disparity.at<float>(v, u) = fb / z;
+  }
+  // The point on pixel (u, v)'s ray at disparity d.
+  void SetOnRay(int u, int v, float d, uint8_t f) {
+    const float z = fb / d;
+    Set(u, v, (static_cast<float>(u) - cx) / fx * z, (static_cast<float>(v) - cy) / fy * z, z, f);
+  }
+};
+
+void ExtendFootprints(const PredictionParams& params, Splat* s) {
+  struct Copy {
+    int u, v, from_u, from_v;
+  };
+  const float radius = static_cast<float>(params.splat_radius_px);
+  const float max_step = static_cast<float>(params.crack_max_step_px);
+  const int H = s->H, W = s->W;
+  std::vector<std::vector<Copy>> copies(static_cast<size_t>(H));
+  cv::parallel_for_(cv::Range(0, H), [&](const cv::Range& rows) {
+    for (int v = rows.start; v < rows.end; ++v) {
+      const float* d_mid = s->disparity.ptr<float>(v);
+      for (int u = 0; u < W; ++u) {
+        if (d_mid[u] > 0) continue;
+        int best_u = -1, best_v = -1;
+        float best_d = 0, best_dist2 = 1e30F;
+        for (int dv = -1; dv <= 1; ++dv) {
+          const int vn = v + dv;
+          if (vn < 0 || vn >= H) continue;
+          const float* d_row = s->disparity.ptr<float>(vn);
+          const float* p_row = s->points.ptr<float>(vn);
+          for (int du = -1; du <= 1; ++du) {
+            const int un = u + du;
+            if (un < 0 || un >= W || !(d_row[un] > 0)) continue;
+            // The neighbour's projection relative to this pixel's centre.
+            const float* p = p_row + 3 * un;
+            const float ou = s->fx * p[0] / p[2] + s->cx - static_cast<float>(u);
+            const float ov = s->fy * p[1] / p[2] + s->cy - static_cast<float>(v);
+            if (std::abs(ou) > radius || std::abs(ov) > radius) continue;
+            const float d = d_row[un], dist2 = ou * ou + ov * ov;
+            const bool better =
+                best_u < 0 || (std::abs(d - best_d) > max_step ? d > best_d : dist2 < best_dist2);
+            if (better) {
+              best_u = un;
+              best_v = vn;
+              best_d = d;
+              best_dist2 = dist2;
+            }
+          }
+        }
+        if (best_u >= 0) copies[static_cast<size_t>(v)].push_back({u, v, best_u, best_v});
+      }
+    }
+  });
+  for (const auto& row : copies) {
+    for (const Copy& c : row) {
+      const float* p = s->points.ptr<float>(c.from_v) + 3 * c.from_u;
+      s->Set(c.u, c.v, p[0], p[1], p[2], s->flags.at<uint8_t>(c.from_v, c.from_u));
+    }
+  }
+}
+
+void FillCracks(const PredictionParams& params, Splat* s) {
+  struct Fill {
+    int u, v;
+    float x, y, z;
+    uint8_t flags;
+  };
+  const float max_step = static_cast<float>(params.crack_max_step_px);
+  const int H = s->H, W = s->W;
+  std::vector<std::vector<Fill>> fills(static_cast<size_t>(H));
+  cv::parallel_for_(cv::Range(1, H - 1), [&](const cv::Range& rows) {
+    for (int v = rows.start; v < rows.end; ++v) {
+      const float* d_mid = s->disparity.ptr<float>(v);
+      for (int u = 1; u + 1 < W; ++u) {
+        if (d_mid[u] > 0) continue;
+        float sx = 0, sy = 0, sz = 0, d_min = 1e30F, d_max = -1e30F;
+        int n = 0, n_measured = 0;
+        uint8_t dynamic = 0;
+        for (int dv = -1; dv <= 1; ++dv) {
+          const float* d_row = s->disparity.ptr<float>(v + dv);
+          const float* p_row = s->points.ptr<float>(v + dv);
+          const uint8_t* f_row = s->flags.ptr<uint8_t>(v + dv);
+          for (int du = -1; du <= 1; ++du) {
+            const float d = d_row[u + du];
+            if (!(d > 0)) continue;
+            d_min = std::min(d_min, d);
+            d_max = std::max(d_max, d);
+            sx += p_row[3 * (u + du)];
+            sy += p_row[3 * (u + du) + 1];
+            sz += p_row[3 * (u + du) + 2];
+            ++n;
+            n_measured += (f_row[u + du] & kMeasured) ? 1 : 0;
+            dynamic |= f_row[u + du] & (kDynamic | kUnseen);
+          }
+        }
+        if (n >= 3 && d_max - d_min <= max_step) {
+          const float inv = 1.0F / static_cast<float>(n);
+          fills[static_cast<size_t>(v)].push_back(
+              {u, v, sx * inv, sy * inv, sz * inv,
+               static_cast<uint8_t>((2 * n_measured > n ? kMeasured : 0) | dynamic)});
+        }
+      }
+    }
+  });
+  for (const auto& row : fills) {
+    for (const Fill& f : row) s->Set(f.u, f.v, f.x, f.y, f.z, f.flags);
+  }
+}
+
+// Small holes (at most max_hole_fill_px wide and tall, found as what an opening by a square of
+// that size removes from the hole mask, away from the image border: wider cracks, slivers
+// uncovered behind an edge) are filled along their row from the points on either side:
+// linearly between two ends of one surface (within 2 px of disparity), else with the farther
+// end (what an edge uncovers is background). The fill counts as measured only when it
+// interpolates one measured surface. Large holes and the newly visible border stay holes: only
+// SGBM can tell what is there.
+void FillSmallHoles(const PredictionParams& params, Splat* s) {
+  constexpr float kSameSurfacePx = 2.0F;
+  const int W = s->W, H = s->H, n = params.max_hole_fill_px;
+  const cv::Mat holes = s->disparity <= 0;
+  cv::Mat large;
+  cv::morphologyEx(holes, large, cv::MORPH_OPEN,
+                   cv::getStructuringElement(cv::MORPH_RECT, cv::Size(n + 1, n + 1)));
+  cv::Mat small = holes & ~large;
+  // Holes near the border may be the start of a newly visible strip: SGBM's.
+  const int margin = std::min({n + 1, W / 2, H / 2});
+  small(cv::Rect(0, 0, W, margin)).setTo(0);
+  small(cv::Rect(0, H - margin, W, margin)).setTo(0);
+  small(cv::Rect(0, 0, margin, H)).setTo(0);
+  small(cv::Rect(W - margin, 0, margin, H)).setTo(0);
+  for (int v = 0; v < H; ++v) {
+    const uint8_t* sm = small.ptr<uint8_t>(v);
+    float* disp = s->disparity.ptr<float>(v);
+    uint8_t* f = s->flags.ptr<uint8_t>(v);
+    int u = 0;
+    while (u < W) {
+      if (!sm[u]) {
+        ++u;
+        continue;
+      }
+      // A run of small-hole pixels on this row, [begin, end), and the points beside it (a run
+      // may also end at a large hole).
+      const int begin = u;
+      while (u < W && sm[u]) ++u;
+      const int end = u;
+      const float d_left = begin > 0 ? disp[begin - 1] : 0.0F;
+      const float d_right = end < W ? disp[end] : 0.0F;
+      if (!(d_left > 0) && !(d_right > 0)) continue;  // between holes: stays a hole
+      const uint8_t f_left = d_left > 0 ? f[begin - 1] : 0, f_right = d_right > 0 ? f[end] : 0;
+      const bool one_surface =
+          d_left > 0 && d_right > 0 && std::abs(d_left - d_right) <= kSameSurfacePx;
+      for (int i = begin; i < end; ++i) {
+        if (one_surface) {
+          const float t = static_cast<float>(i - begin + 1) / static_cast<float>(end - begin + 1);
+          s->SetOnRay(i, v, d_left * (1 - t) + d_right * t,
+                      static_cast<uint8_t>((f_left & f_right & kMeasured) |
+                                           ((f_left | f_right) & (kDynamic | kUnseen))));
+        } else {
+          const bool take_left = d_left > 0 && (!(d_right > 0) || d_left < d_right);
+          // A guess at what was uncovered: not a measurement.
+          s->SetOnRay(i, v, take_left ? d_left : d_right,
+                      static_cast<uint8_t>((f_left | f_right) & (kDynamic | kUnseen)));
+        }
+      }
+    }
+  }
+}
+
+}  // namespace
+
+void PredictionParams::Validate() const {
+  if (image_step != 1 && image_step != 2) {
+    throw std::invalid_argument("EP generator: image_step must be 1 or 2");
+  }
+  if (!(splat_radius_px >= 0.5 && splat_radius_px < 1.0)) {
+    throw std::invalid_argument("EP generator: splat_radius_px must be in [0.5, 1)");
+  }
+  if (!(crack_max_step_px >= 0) || !(min_depth_m > 0) || max_hole_fill_px < 0) {
+    throw std::invalid_argument(
+        "EP generator: crack_max_step_px >= 0, min_depth_m > 0, max_hole_fill_px >= 0");
+  }
+}
+
+cv::Size ComparisonGrid(const stereo::RectifiedGeometry& camera, int image_step) {
+  return {(camera.width + image_step - 1) / image_step,
+          (camera.height + image_step - 1) / image_step};
+}
+
+cv::Mat PointsFromDisparity(const cv::Mat& disparity, const stereo::RectifiedGeometry& camera,
+                            double min_disparity_px) {
+  CheckCamera(camera);
+  if (disparity.type() != CV_32FC1 || disparity.size() != cv::Size(camera.width, camera.height)) {
+    throw std::invalid_argument("points from disparity: CV_32FC1 of the camera's size expected");
+  }
+  const double fb = camera.fx * camera.baseline_m;
+  cv::Mat points(disparity.size(), CV_32FC3);
+  for (int v = 0; v < disparity.rows; ++v) {
+    const float* d = disparity.ptr<float>(v);
+    auto* p = points.ptr<cv::Vec3f>(v);
+    const double y = (v - camera.cy) / camera.fy;
+    for (int u = 0; u < disparity.cols; ++u) {
+      if (!(d[u] > min_disparity_px) || !std::isfinite(d[u])) {
+        p[u] = cv::Vec3f(kNaN, kNaN, kNaN);
+        continue;
+      }
+      const double z = fb / d[u];
+      p[u] = cv::Vec3f(static_cast<float>((u - camera.cx) / camera.fx * z),
+                       static_cast<float>(y * z), static_cast<float>(z));
+    }
+  }
+  return points;
+}
+
+Prediction Predict(const MapState& previous, const Eigen::Isometry3d& T_cur_prev,
+                   const stereo::RectifiedGeometry& camera, const PredictionParams& params,
+                   PredictionScratch* scratch) {
+  CheckInputs(previous, camera, T_cur_prev, params);
+  PredictionScratch local;
+  PredictionScratch& mem = scratch ? *scratch : local;
+  // Of the two point buffers, the one the previous state does not use.
+  cv::Mat& points_buffer = mem.points[0].data && mem.points[0].data == previous.points.data
+                               ? mem.points[1]
+                               : mem.points[0];
+  const int W = camera.width, H = camera.height;
+  Splat s;
+  s.W = W;
+  s.H = H;
+  s.fx = static_cast<float>(camera.fx);
+  s.fy = static_cast<float>(camera.fy);
+  s.cx = static_cast<float>(camera.cx);
+  s.cy = static_cast<float>(camera.cy);
+  s.fb = static_cast<float>(camera.fx * camera.baseline_m);  // z = fb / d
+  const float fx = s.fx, fy = s.fy, cx = s.cx, cy = s.cy, fb = s.fb;
+  const Eigen::Matrix3f R = T_cur_prev.linear().cast<float>();
+  const float r00 = R(0, 0), r01 = R(0, 1), r02 = R(0, 2);
+  const float r10 = R(1, 0), r11 = R(1, 1), r12 = R(1, 2);
+  const float r20 = R(2, 0), r21 = R(2, 1), r22 = R(2, 2);
+  const float tx = static_cast<float>(T_cur_prev.translation().x());
+  const float ty = static_cast<float>(T_cur_prev.translation().y());
+  const float tz = static_cast<float>(T_cur_prev.translation().z());
+  const float min_depth = static_cast<float>(params.min_depth_m);
+  const float max_step = static_cast<float>(params.crack_max_step_px);
+
+  // 1. p_D (Sec. IV-B): every point X of frame k becomes X' = R X + t in frame k+1 and lands on
+  //    the pixel nearest to its projection. Between two surfaces the nearer point wins
+  //    (z-buffer); on one surface, the point nearer to the pixel centre (which keeps one point
+  //    per pixel where the lattice of exact points is slightly irregular).
+  //    Two threads share the work: each moves the points of one half of the rows and writes
+  //    those that land in its own half of the target rows; the few that cross the middle are
+  //    written afterwards, in order (the camera moves little between frames).
+  //    A pixel is empty while its disparity is 0; its point is then never read.
+  points_buffer.create(H, W, CV_32FC3);
+  mem.flags.create(H, W, CV_8U);
+  mem.splat_disparity.create(H, W, CV_32F);
+  s.points = points_buffer;
+  s.flags = mem.flags;
+  s.flags.setTo(0);
+  s.disparity = mem.splat_disparity;
+  s.disparity.setTo(0);
+  float* dst_points = s.points.ptr<float>(0);  // all freshly allocated: continuous
+  uint8_t* dst_flags = s.flags.ptr<uint8_t>(0);
+  float* dst_disp = s.disparity.ptr<float>(0);
+  struct Landing {
+    int ui, vi;
+    float x, y, z, d, du, dv;
+    uint8_t flags;
+  };
+  // Writes a point if it beats the pixel's current one (see above).
+  const auto land = [&](const Landing& l) {
+    const size_t idx =
+        static_cast<size_t>(l.vi) * static_cast<size_t>(W) + static_cast<size_t>(l.ui);
+    const float d_old = dst_disp[idx];  // 0 when empty
+    float* dst = dst_points + 3 * idx;
+    if (d_old != 0.0F) {
+      if (std::abs(l.d - d_old) > max_step) {
+        if (l.d < d_old) return;  // behind the current surface
+      } else {                    // one surface: the point nearer to the pixel centre stays
+        const float inv = 1.0F / dst[2];
+        const float du_old = fx * dst[0] * inv + cx - static_cast<float>(l.ui);
+        const float dv_old = fy * dst[1] * inv + cy - static_cast<float>(l.vi);
+        if (l.du * l.du + l.dv * l.dv >= du_old * du_old + dv_old * dv_old) return;
+      }
+    }
+    dst[0] = l.x;
+    dst[1] = l.y;
+    dst[2] = l.z;
+    dst_flags[idx] = l.flags;
+    dst_disp[idx] = l.d;
+  };
+  const int halves = H >= 64 ? 2 : 1;
+  std::vector<std::vector<Landing>> crossing(static_cast<size_t>(halves));
+  cv::parallel_for_(cv::Range(0, halves), [&](const cv::Range& range) {
+    for (int half = range.start; half < range.end; ++half) {
+      const int row_begin = half * H / halves, row_end = (half + 1) * H / halves;
+      auto& crossers = crossing[static_cast<size_t>(half)];
+      for (int v = row_begin; v < row_end; ++v) {
+        const float* src = previous.points.ptr<float>(v);
+        const uint8_t* m = previous.flags.ptr<uint8_t>(v);
+        for (int u = 0; u < W; ++u, src += 3) {
+          // No point here (NaN), or a broken one (an infinite x or y is caught below).
+          const float px = src[0], py = src[1], pz = src[2];
+          if (!(pz > 0) || !std::isfinite(pz)) continue;
+          const float x = r00 * px + r01 * py + r02 * pz + tx;
+          const float y = r10 * px + r11 * py + r12 * pz + ty;
+          const float z = r20 * px + r21 * py + r22 * pz + tz;
+          if (!(z > min_depth)) continue;  // behind the new camera (or NaN)
+          const float inv_z = 1.0F / z;
+          const float u1 = fx * x * inv_z + cx, v1 = fy * y * inv_z + cy;
+          // Outside the image (the comparisons are false for NaN and infinities, too).
+          if (!(u1 > -0.5F && v1 > -0.5F && u1 < W - 0.5F && v1 < H - 0.5F)) continue;
+          const int ui = static_cast<int>(u1 + 0.5F), vi = static_cast<int>(v1 + 0.5F);
+          const Landing l{ui,
+                          vi,
+                          x,
+                          y,
+                          z,
+                          fb * inv_z,
+                          u1 - static_cast<float>(ui),
+                          v1 - static_cast<float>(vi),
+                          m[u]};
+          if (vi >= row_begin && vi < row_end) {
+            land(l);
+          } else {
+            crossers.push_back(l);
+          }
+        }
+      }
+    }
+  });
+  for (const auto& crossers : crossing) {
+    for (const Landing& l : crossers) land(l);
+  }
+  // ... and an empty pixel takes the best point held by a neighbour whose projection lies
+  // within splat_radius_px of its own centre (a footprint of 1.5 px).
+  if (params.splat_radius_px > 0.5) ExtendFootprints(params, &s);
+  FillCracks(params, &s);
+  if (params.max_hole_fill_px > 0) FillSmallHoles(params, &s);
+
+  // The predicted disparity and the holes, at full resolution.
+  Prediction out;
+  mem.disparity.create(H, W, CV_32F);
+  mem.geometry.create(H, W, CV_32F);
+  out.disparity = mem.disparity;
+  out.geometry = mem.geometry;
+  out.holes.create(H, W, CV_8U);
+  std::atomic<int> non_finite{0};
+  cv::parallel_for_(cv::Range(0, H), [&](const cv::Range& rows) {
+    int broken = 0;
+    for (int v = rows.start; v < rows.end; ++v) {
+      float* pts = s.points.ptr<float>(v);
+      const float* d_splat = s.disparity.ptr<float>(v);
+      float* disp = out.disparity.ptr<float>(v);
+      float* geo = out.geometry.ptr<float>(v);
+      uint8_t* flags = s.flags.ptr<uint8_t>(v);
+      uint8_t* hole = out.holes.ptr<uint8_t>(v);
+      for (int u = 0; u < W; ++u) {
+        float* p = pts + 3 * u;
+        const float d = d_splat[u];
+        const bool ok = d > 0 && std::isfinite(d) && std::isfinite(p[0]) && std::isfinite(p[1]) &&
+                        std::isfinite(p[2]);
+        if (ok) {
+          geo[u] = d;
+          disp[u] = (flags[u] & kMeasured) ? d : kNaN;
+          hole[u] = 0;
+        } else {
+          if (d > 0) ++broken;  // a point was there but the arithmetic broke down
+          geo[u] = kNaN;
+          disp[u] = kNaN;
+          hole[u] = 255;
+          flags[u] = 0;
+          p[0] = p[1] = p[2] = kNaN;
+        }
+      }
+    }
+    non_finite += broken;
+  });
+  out.non_finite_rejected = non_finite;
+  out.points = s.points;
+  out.flags = s.flags;
+
+  // 2. p(L^k; T^{k+1}, D_-^{k+1}) and p(C^k; ...) (Sec. IV-A) on the comparison grid: each of
+  //    its pixel centres (u, v) = step * (i, j) is back-projected at its point's depth,
+  //    X' = z ray(u, v), moved back into frame k, X = R^T (X' - t), and projected there:
+  //    q = pi(X). L^k is sampled at q (full resolution), C^k at q / step.
+  const int step = params.image_step;
+  const cv::Size grid = ComparisonGrid(camera, step);
+  for (cv::Mat* m : {&mem.map_x, &mem.map_y, &mem.grid_x, &mem.grid_y}) m->create(grid, CV_32F);
+  cv::Mat &map_x = mem.map_x, &map_y = mem.map_y, &grid_x = mem.grid_x, &grid_y = mem.grid_y;
+  out.image_valid.create(grid, CV_8U);
+  const float inv_step = 1.0F / static_cast<float>(step);
+  cv::parallel_for_(cv::Range(0, grid.height), [&](const cv::Range& rows) {
+    for (int i = rows.start; i < rows.end; ++i) {
+      const int v = i * step;
+      const float* pts = s.points.ptr<float>(v);
+      float* mx = map_x.ptr<float>(i);
+      float* my = map_y.ptr<float>(i);
+      float* gx = grid_x.ptr<float>(i);
+      float* gy = grid_y.ptr<float>(i);
+      uint8_t* valid = out.image_valid.ptr<uint8_t>(i);
+      const float ray_y = (static_cast<float>(v) - cy) / fy;
+      for (int j = 0; j < grid.width; ++j) {
+        const int u = j * step;
+        const float z = pts[3 * u + 2];
+        valid[j] = 0;
+        mx[j] = my[j] = gx[j] = gy[j] = -1.0F;
+        if (!(z > min_depth)) continue;  // a hole (NaN) or degenerate
+        // X' - t, then R^T.
+        const float ax = (static_cast<float>(u) - cx) / fx * z - tx;
+        const float ay = ray_y * z - ty;
+        const float az = z - tz;
+        const float x = r00 * ax + r10 * ay + r20 * az;
+        const float y = r01 * ax + r11 * ay + r21 * az;
+        const float zk = r02 * ax + r12 * ay + r22 * az;
+        const float qx = fx * x / zk + cx, qy = fy * y / zk + cy;
+        // Inside frame k (false for NaN): else nothing to sample.
+        if (!(zk > min_depth && qx >= 0 && qy >= 0 && qx <= static_cast<float>(W - 1) &&
+              qy <= static_cast<float>(H - 1))) {
+          continue;
+        }
+        mx[j] = qx;
+        my[j] = qy;
+        gx[j] = qx * inv_step;
+        gy[j] = qy * inv_step;
+        valid[j] = 255;
+      }
+    }
+  });
+  cv::Mat& image_k = mem.image;
+  previous.image.convertTo(image_k, CV_32F);  // interpolate in float: no rounding of L_-
+  cv::remap(image_k, out.image, map_x, map_y, cv::INTER_LINEAR, cv::BORDER_CONSTANT, 0);
+  cv::remap(previous.accumulated, out.accumulated, grid_x, grid_y, cv::INTER_LINEAR,
+            cv::BORDER_REPLICATE);
+  out.accumulated.setTo(0, out.image_valid == 0);
+  // A non-finite C^k value would spread through the bilinear sample: never let it through.
+  cv::patchNaNs(out.accumulated, 0.0);
+  return out;
+}
+
+}  // namespace epmap::ep

@@ -1,0 +1,114 @@
+#pragma once
+// The EP generator (paper 000, Sec. IV-A and IV-B, Fig. 5): from the map at frame k and the
+// camera's motion to frame k+1 it predicts
+//   D_-^{k+1} = p_D(D^k; T^{k+1})            the disparity (Sec. IV-B),
+//   L_-^{k+1} = p(L^k; T^{k+1}, D_-^{k+1})   the left image (Sec. IV-A),
+//   C_-^{k+1} = p(C^k; T^{k+1}, D_-^{k+1})   the accumulated error (Sec. IV-A),
+// and the holes: pixels of frame k+1 that nothing of frame k explains (newly visible border,
+// disocclusions).
+//
+// The map is kept as one 3-D point per pixel (camera frame), not as a disparity at the pixel
+// centre: p_D moves each point rigidly by T_{k+1,k} and re-projects it. Points keep their exact
+// positions from frame to frame, so that a depth edge moves with the camera by fractions of a
+// pixel per frame; re-deriving the points from pixel centres each frame (our first version)
+// rounds every edge back onto the grid each frame, and under slow motion the predicted edges
+// stayed put while the real ones moved (measured: bad-2 of the map grew by ~9 points in 60
+// frames of a synthetic pan, versus none with points). Each pixel takes the nearest point
+// (z-buffer), then, if still empty, the best point of a neighbour projecting within
+// splat_radius_px of its centre; single-pixel cracks within one surface are closed by
+// averaging, and small interior holes by interpolation along their row.
+//
+// L_- and C_- are sampled backwards: each pixel centre of the comparison grid is back-projected
+// at its point's depth into frame k, where L^k (full resolution) and C^k are interpolated
+// bilinearly (forward splatting intensities would leave cracks and round positions). The
+// comparison grid is every image_step-th pixel in x and y: the comparator does not need every
+// pixel to find a hand, and at step 2 it costs a quarter.
+// Geometry is the rectified left camera (pinhole fx, fy, cx, cy; depth z = fx * baseline / d).
+
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <opencv2/core.hpp>
+
+#include "perception/stereo/rectification.h"
+
+namespace epmap::ep {
+
+// Per-point flags, carried along with the points (bits of a CV_8U image).
+enum PointFlags : uint8_t {
+  kMeasured = 1,  // the point is a stereo measurement (else a fill for an SGBM failure)
+  kDynamic = 2,   // the point belonged to something found moving on its own
+  kUnseen = 4,    // a fill for content SGBM has never seen (it lay in SGBM's blind margins)
+};
+
+// The map at frame k, as the generator needs it.
+struct MapState {
+  cv::Mat points;       // CV_32FC3 3-D point per pixel, camera frame k (m); NaN = none
+  cv::Mat flags;        // CV_8U PointFlags of each point
+  cv::Mat image;        // CV_8U grey L^k, full resolution
+  cv::Mat accumulated;  // CV_32F C^k (grey levels), on the comparison grid
+};
+
+struct PredictionParams {
+  // L_- and C_- are predicted on every image_step-th pixel in x and y (1 or 2).
+  int image_step = 2;
+  // A moved point is offered to every pixel whose centre lies within this distance (in x and
+  // in y) of its projection; each pixel keeps the best offer. 0.5 = nearest pixel only.
+  // (Nearest-pixel splatting alone lets the slightly irregular lattice of exact points collide
+  // here and gap there; on the head scenario 0.75 saves ~3% of SGBM area for the gaps but costs
+  // more CPU than that saves.)
+  double splat_radius_px = 0.5;
+  // Neighbouring points within this disparity difference belong to one surface (cracks are
+  // closed between them; between two surfaces the nearer point wins).
+  double crack_max_step_px = 1.0;
+  // Holes at most this wide and tall (pixels) that keep away from the image border by more
+  // than their size are filled along their row from their neighbours (see FillSmallHoles in
+  // ep_generator.cc); 0 disables. Each such hole would otherwise cost an SGBM box whose
+  // padding dwarfs it, and SGBM in a small box lacks the context of the full frame (measured
+  // on the head scenario: bad-2 of 2x2 targets 14% with 8 px of context, 8% on the full frame).
+  int max_hole_fill_px = 4;
+  // Points nearer than this to the new camera are dropped (behind it or degenerate).
+  double min_depth_m = 0.05;
+
+  void Validate() const;  // std::invalid_argument with the reason
+};
+
+struct Prediction {
+  cv::Mat disparity;  // D_-: CV_32F, NaN where unknown (holes, and where the point is a fill)
+  cv::Mat geometry;   // CV_32F disparity of every predicted point (measured or fill), NaN at holes
+  cv::Mat points;     // CV_32FC3 the moved points, camera frame k+1; NaN at holes
+  cv::Mat flags;      // CV_8U PointFlags of the predicted points (0 at holes)
+  cv::Mat holes;      // CV_8U, 255 where nothing of frame k projects (or is non-finite)
+  // On the comparison grid (full size / image_step):
+  cv::Mat image;                // L_-: CV_32F grey levels, 0 where invalid
+  cv::Mat accumulated;          // C_-: CV_32F, 0 where invalid
+  cv::Mat image_valid;          // CV_8U 255 where L_- and C_- exist
+  int non_finite_rejected = 0;  // values that came out non-finite and were made holes
+};
+
+// Memory a caller may lend to Predict so that the same large buffers are not allocated (and
+// first touched, page by page) at every frame: about a tenth of a frame's work. Predict writes
+// into it; the Prediction's points, flags, disparity and geometry then live there (the points
+// alternate between two buffers, so that a state made of the last prediction can be read while
+// the next one is written). Give one scratch to one pipeline; never publish what lives in it.
+struct PredictionScratch {
+  cv::Mat points[2], flags, splat_disparity, disparity, geometry;
+  cv::Mat map_x, map_y, grid_x, grid_y, image;
+};
+
+// T_cur_prev maps points of the previous camera frame into the current one
+// (T_cur_prev = T_base_cam0(k+1)^-1 * T_base_cam0(k)). Throws std::invalid_argument if the
+// state's images disagree in size or type with each other or with the camera, or if
+// T_cur_prev is not finite.
+Prediction Predict(const MapState& previous, const Eigen::Isometry3d& T_cur_prev,
+                   const stereo::RectifiedGeometry& camera, const PredictionParams& params = {},
+                   PredictionScratch* scratch = nullptr);
+
+// The size of the comparison grid for a camera and a step.
+cv::Size ComparisonGrid(const stereo::RectifiedGeometry& camera, int image_step);
+
+// Back-projects a disparity map (CV_32F, NaN or <= min_disparity_px = none) into one point per
+// pixel centre (CV_32FC3, camera frame, NaN = none).
+cv::Mat PointsFromDisparity(const cv::Mat& disparity, const stereo::RectifiedGeometry& camera,
+                            double min_disparity_px = 0.25);
+
+}  // namespace epmap::ep

@@ -1,0 +1,168 @@
+#include "perception/ep/update/roi_stereo.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <opencv2/imgproc.hpp>
+#include <stdexcept>
+
+namespace epmap::ep {
+
+void RoiStereoParams::Validate() const {
+  if (context_px < 0) throw std::invalid_argument("ROI stereo: context_px must be >= 0");
+  if (!(merge_slack >= 1.0)) throw std::invalid_argument("ROI stereo: merge_slack must be >= 1");
+  if (band_rows < 1) throw std::invalid_argument("ROI stereo: band_rows must be >= 1");
+}
+
+RoiStereo::RoiStereo(const stereo::SgbmParams& sgbm, const RoiStereoParams& params)
+    : sgbm_(sgbm), params_(params) {
+  sgbm_.Validate();
+  params_.Validate();
+  matcher_ = cv::StereoSGBM::create(sgbm.min_disparity, sgbm.num_disparities, sgbm.block_size,
+                                    sgbm.p1, sgbm.p2, sgbm.disp12_max_diff, sgbm.pre_filter_cap,
+                                    sgbm.uniqueness_ratio, sgbm.speckle_window, sgbm.speckle_range,
+                                    sgbm.mode);
+}
+
+cv::Mat RoiStereo::Match(const cv::Mat& left, const cv::Mat& right, int min_disparity,
+                         int num_disparities) {
+  matcher_->setMinDisparity(min_disparity);
+  matcher_->setNumDisparities(num_disparities);
+  cv::Mat fixed;
+  matcher_->compute(left, right, fixed);  // CV_16S, disparity * 16
+  cv::Mat out(fixed.size(), CV_32FC1);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const int invalid_below = min_disparity * 16;  // "no match" is (min_disparity - 1) * 16
+  for (int r = 0; r < fixed.rows; ++r) {
+    const auto* in = fixed.ptr<int16_t>(r);
+    auto* o = out.ptr<float>(r);
+    for (int c = 0; c < fixed.cols; ++c) {
+      o[c] = in[c] < invalid_below ? nan : static_cast<float>(in[c]) * (1.0F / 16.0F);
+    }
+  }
+  return out;
+}
+
+cv::Mat RoiStereo::ComputeFull(const cv::Mat& left, const cv::Mat& right) {
+  if (left.size() != right.size() || left.type() != right.type()) {
+    throw std::invalid_argument("ROI stereo: left and right differ in size or type");
+  }
+  return Match(left, right, sgbm_.min_disparity, sgbm_.num_disparities);
+}
+
+std::vector<RoiBox> RoiStereo::PlanBoxes(const cv::Mat& mask) const {
+  const int half = sgbm_.block_size / 2 + params_.context_px;
+  const int search = std::max(sgbm_.min_disparity + sgbm_.num_disparities, 0);
+  const cv::Rect image(0, 0, mask.cols, mask.rows);
+  const auto pad = [&](const cv::Rect& t) {
+    return cv::Rect(t.x - half - search, t.y - half, t.width + 2 * half + search,
+                    t.height + 2 * half) &
+           image;
+  };
+  // Tight boxes of each band's connected pieces.
+  std::vector<RoiBox> boxes;
+  cv::Mat labels, stats, centroids;
+  for (int y0 = 0; y0 < mask.rows; y0 += params_.band_rows) {
+    const cv::Rect band(0, y0, mask.cols, std::min(params_.band_rows, mask.rows - y0));
+    const int n = cv::connectedComponentsWithStats(mask(band), labels, stats, centroids, 8, CV_32S);
+    for (int i = 1; i < n; ++i) {
+      const cv::Rect target(
+          stats.at<int>(i, cv::CC_STAT_LEFT), y0 + stats.at<int>(i, cv::CC_STAT_TOP),
+          stats.at<int>(i, cv::CC_STAT_WIDTH), stats.at<int>(i, cv::CC_STAT_HEIGHT));
+      boxes.push_back({pad(target), target});
+    }
+  }
+  // Greedy merging while some pair costs no more together than apart.
+  bool merged = true;
+  while (merged) {
+    merged = false;
+    for (size_t a = 0; a < boxes.size(); ++a) {
+      for (size_t b = a + 1; b < boxes.size();) {
+        const cv::Rect target = boxes[a].target | boxes[b].target;
+        const cv::Rect padded = pad(target);
+        const double apart = static_cast<double>(boxes[a].padded.area()) + boxes[b].padded.area();
+        if (padded.area() <= params_.merge_slack * apart) {
+          boxes[a] = {padded, target};
+          boxes.erase(boxes.begin() + static_cast<std::ptrdiff_t>(b));
+          merged = true;
+          b = a + 1;  // the grown box may now absorb earlier ones
+        } else {
+          ++b;
+        }
+      }
+    }
+  }
+  return boxes;
+}
+
+RoiStereoStats RoiStereo::ComputeMasked(const cv::Mat& left, const cv::Mat& right,
+                                        const cv::Mat& mask, cv::Mat& disparity,
+                                        const cv::Mat& expected) {
+  if (left.size() != right.size() || left.type() != right.type()) {
+    throw std::invalid_argument("ROI stereo: left and right differ in size or type");
+  }
+  if (mask.type() != CV_8UC1 || mask.size() != left.size() || disparity.type() != CV_32FC1 ||
+      disparity.size() != left.size()) {
+    throw std::invalid_argument("ROI stereo: mask (CV_8U) and disparity (CV_32F) must match");
+  }
+  if (!expected.empty() && (expected.type() != CV_32FC1 || expected.size() != left.size())) {
+    throw std::invalid_argument(
+        "ROI stereo: expected disparity must be CV_32F of the images' size");
+  }
+  RoiStereoStats stats;
+  stats.plan = PlanBoxes(mask);
+  stats.boxes = static_cast<int>(stats.plan.size());
+  stats.target_pixels = cv::countNonZero(mask);
+  const int full_min = sgbm_.min_disparity, full_num = sgbm_.num_disparities;
+  const int half = sgbm_.block_size / 2 + params_.context_px;
+  for (const RoiBox& box : stats.plan) {
+    int min_d = full_min, num_d = full_num;
+    if (!expected.empty()) {
+      // The range the box's target pixels need, if (nearly) all of them have an expectation.
+      float lo = std::numeric_limits<float>::max(), hi = std::numeric_limits<float>::lowest();
+      long long with = 0, without = 0;
+      for (int v = box.target.y; v < box.target.y + box.target.height; ++v) {
+        const uint8_t* m = mask.ptr<uint8_t>(v);
+        const float* e = expected.ptr<float>(v);
+        for (int u = box.target.x; u < box.target.x + box.target.width; ++u) {
+          if (!m[u]) continue;
+          if (!std::isfinite(e[u])) {
+            ++without;
+            continue;
+          }
+          ++with;
+          lo = std::min(lo, e[u]);
+          hi = std::max(hi, e[u]);
+        }
+      }
+      const bool known =
+          with > 0 && static_cast<double>(without) <=
+                          params_.range_unknown_share * static_cast<double>(with + without);
+      if (known && hi >= lo) {
+        const double margin = params_.range_margin_px + params_.range_margin_share * hi;
+        const int lo_d = std::max(full_min, static_cast<int>(std::floor(lo - margin)));
+        const int hi_d = static_cast<int>(std::ceil(hi + margin));
+        const int num = (hi_d - lo_d + 1 + 15) / 16 * 16;
+        if (lo_d + num <= full_min + full_num && num < full_num) {
+          min_d = lo_d;
+          num_d = num;
+          ++stats.narrowed_boxes;
+        }
+      }
+    }
+    // The padding to the left needs only this box's search range.
+    cv::Rect padded = box.padded;
+    const int left_edge = std::max(0, box.target.x - half - (min_d + num_d));
+    padded.width -= left_edge - padded.x;
+    padded.x = left_edge;
+    stats.computed_pixels += static_cast<long long>(padded.area()) * num_d / full_num;
+    const cv::Mat fresh = Match(left(padded), right(padded), min_d, num_d);
+    // Only the box's own mask pixels, which have the full padding around them.
+    const cv::Rect in_box(box.target.x - padded.x, box.target.y - padded.y, box.target.width,
+                          box.target.height);
+    fresh(in_box).copyTo(disparity(box.target), mask(box.target));
+  }
+  return stats;
+}
+
+}  // namespace epmap::ep

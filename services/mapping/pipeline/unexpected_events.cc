@@ -1,0 +1,68 @@
+#include "services/mapping/pipeline/unexpected_events.h"
+
+#include <algorithm>
+
+namespace epmap::mapping {
+
+std::shared_ptr<const UnexpectedFrame> UnexpectedEventHub::Subscription::Next(
+    std::chrono::milliseconds timeout) {
+  std::unique_lock lock(mutex_);
+  ready_.wait_for(lock, timeout, [&] { return closed_ || !queue_.empty(); });
+  if (queue_.empty()) return nullptr;
+  auto frame = std::move(queue_.front());
+  queue_.pop_front();
+  return frame;
+}
+
+uint64_t UnexpectedEventHub::Subscription::dropped() const {
+  std::lock_guard lock(mutex_);
+  return dropped_;
+}
+
+std::shared_ptr<UnexpectedEventHub::Subscription> UnexpectedEventHub::Subscribe(size_t capacity) {
+  std::shared_ptr<Subscription> s(new Subscription(std::max<size_t>(capacity, 1)));
+  std::lock_guard lock(mutex_);
+  if (closed_) s->closed_ = true;
+  subscriptions_.push_back(s);
+  return s;
+}
+
+void UnexpectedEventHub::Unsubscribe(const std::shared_ptr<Subscription>& subscription) {
+  std::lock_guard lock(mutex_);
+  subscriptions_.erase(std::remove(subscriptions_.begin(), subscriptions_.end(), subscription),
+                       subscriptions_.end());
+}
+
+void UnexpectedEventHub::Publish(const std::shared_ptr<const UnexpectedFrame>& frame) {
+  std::lock_guard lock(mutex_);
+  for (const auto& s : subscriptions_) {
+    {
+      std::lock_guard sub_lock(s->mutex_);
+      if (s->queue_.size() >= s->capacity_) {
+        s->queue_.pop_front();
+        s->dropped_++;
+      }
+      s->queue_.push_back(frame);
+    }
+    s->ready_.notify_one();
+  }
+}
+
+void UnexpectedEventHub::Close() {
+  std::lock_guard lock(mutex_);
+  closed_ = true;
+  for (const auto& s : subscriptions_) {
+    {
+      std::lock_guard sub_lock(s->mutex_);
+      s->closed_ = true;
+    }
+    s->ready_.notify_all();
+  }
+}
+
+size_t UnexpectedEventHub::subscribers() const {
+  std::lock_guard lock(mutex_);
+  return subscriptions_.size();
+}
+
+}  // namespace epmap::mapping

@@ -1,0 +1,270 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+#include <vector>
+
+#include "perception/ep/ep_settings.h"
+#include "perception/ep/expected_perception.h"
+#include "perception/stereo/metrics.h"
+#include "perception/stereo/sgbm.h"
+#include "tests/unit/ep/synthetic_scene.h"
+
+namespace epmap {
+namespace {
+
+using ep::EpParams;
+using ep::ExpectedPerception;
+using ep::FrameMode;
+
+EpParams Params() {
+  EpParams p;
+  p.sgbm.num_disparities = 48;
+  return p;
+}
+
+struct Frame {
+  cv::Mat left, right, disparity, square;
+  Eigen::Isometry3d T_base_cam0;
+  int64_t stamp_ns;
+};
+
+// Frame k of a head turning slowly left and right (yaw 0.06 sin(0.15 k) rad), with the square
+// crossing the view at 1.2 m when `square` is set.
+Frame Render(const testing::SyntheticScene& base, int k, bool square) {
+  testing::SyntheticScene scene = base;
+  if (square) scene.SetMovingSquare(Eigen::Vector3d(-0.45 + 0.03 * k, -0.05, 1.2));
+  Frame f;
+  f.T_base_cam0 = testing::HeadPose(0.06 * std::sin(0.15 * k), 0.02 * std::sin(0.1 * k));
+  scene.Render(f.T_base_cam0, &f.left, &f.right, &f.disparity, &f.square);
+  f.stamp_ns = 1'000'000'000LL + k * 33'333'333LL;
+  return f;
+}
+
+double Iou(const cv::Mat& a, const cv::Mat& b) {
+  const double uni = cv::countNonZero(a | b);
+  return uni > 0 ? cv::countNonZero(a & b) / uni : 1.0;
+}
+
+TEST(ExpectedPerception, StillRigComputesOnceThenPredictsTheSameMap) {
+  const testing::SyntheticScene scene;
+  ExpectedPerception ep(scene.camera(), Params());
+  const Frame f = Render(scene, 0, false);
+  const auto first = ep.Process(f.left, f.right, f.T_base_cam0, f.stamp_ns);
+  EXPECT_EQ(first->mode, FrameMode::kFirst);
+  EXPECT_DOUBLE_EQ(first->recomputed_share, 1.0);
+  for (int k = 1; k <= 5; ++k) {
+    const auto res = ep.Process(f.left, f.right, f.T_base_cam0, f.stamp_ns + k);
+    EXPECT_EQ(res->mode, FrameMode::kPredicted);
+    EXPECT_TRUE(res->compared);
+    EXPECT_EQ(cv::countNonZero(res->unexpected), 0);
+    EXPECT_LT(res->mean_error, 0.5);
+    // Only the rolling refresh band (1/20 of the rows) is recomputed.
+    EXPECT_LT(res->recomputed_share, 0.07);
+    int same = 0, known = 0;
+    for (int v = 0; v < f.left.rows; ++v) {
+      for (int u = 0; u < f.left.cols; ++u) {
+        const float a = first->disparity.at<float>(v, u), b = res->disparity.at<float>(v, u);
+        if (std::isnan(a) && std::isnan(b)) continue;
+        ++known;
+        same += std::abs(a - b) < 0.5F;
+      }
+    }
+    EXPECT_GT(same, known * 99 / 100) << "frame " << k;
+  }
+  EXPECT_EQ(ep.counters().frames, 6u);
+  EXPECT_EQ(ep.counters().predicted, 5u);
+}
+
+// The paper's experiment in small: a turning head, a square moving on its own. The unexpected
+// mask finds the square; the map stays as good as full-frame SGBM; little is recomputed.
+TEST(ExpectedPerception, FindsTheMovingSquareAndKeepsTheMapWhileTheHeadTurns) {
+  const testing::SyntheticScene scene;
+  const EpParams params = Params();
+  ExpectedPerception ep(scene.camera(), params);
+  const stereo::SgbmMatcher full(params.sgbm);
+  std::vector<double> iou;
+  stereo::DisparityScore ep_score, full_score;
+  double share = 0;
+  for (int k = 0; k < 24; ++k) {
+    const Frame f = Render(scene, k, true);
+    const auto res = ep.Process(f.left, f.right, f.T_base_cam0, f.stamp_ns);
+    if (k < 3) continue;  // the first frames: C has no history yet
+    EXPECT_EQ(res->mode, FrameMode::kPredicted);
+    share += res->recomputed_share;
+    if (cv::countNonZero(f.square) > 200) {
+      iou.push_back(Iou(res->unexpected, f.square));
+      ASSERT_FALSE(res->regions.empty());
+      const auto& region = res->regions.front();
+      EXPECT_TRUE(region.has_centroid);
+      EXPECT_NEAR(region.centroid_cam0.z(), 1.2, 0.25) << "frame " << k;
+    }
+    const auto add = [](stereo::DisparityScore* total, const stereo::DisparityScore& s) {
+      total->gt_pixels += s.gt_pixels;
+      total->filled += s.filled;
+      total->bad_filled += s.bad_filled;
+    };
+    add(&ep_score, stereo::ScoreDisparity(res->disparity, f.disparity));
+    add(&full_score, stereo::ScoreDisparity(full.Compute(f.left, f.right), f.disparity));
+  }
+  ASSERT_GE(iou.size(), 10u);
+  double mean_iou = 0;
+  for (double x : iou) mean_iou += x / static_cast<double>(iou.size());
+  EXPECT_GT(mean_iou, 0.5);
+  EXPECT_LT(ep_score.bad_counting_unknown(), full_score.bad_counting_unknown() + 0.03);
+  EXPECT_LT(share / 21.0, 0.35);
+}
+
+TEST(ExpectedPerception, AHeadWithoutMovingThingsFindsNothingUnexpected) {
+  const testing::SyntheticScene scene;
+  ExpectedPerception ep(scene.camera(), Params());
+  for (int k = 0; k < 12; ++k) {
+    const Frame f = Render(scene, k, false);
+    const auto res = ep.Process(f.left, f.right, f.T_base_cam0, f.stamp_ns);
+    EXPECT_LT(res->unexpected_share, 0.005) << "frame " << k;
+  }
+}
+
+TEST(ExpectedPerception, APoseJumpIsComputedWholeAndCounted) {
+  const testing::SyntheticScene scene;
+  ExpectedPerception ep(scene.camera(), Params());
+  const Frame f0 = Render(scene, 0, false), f1 = Render(scene, 1, false),
+              f2 = Render(scene, 2, false), f3 = Render(scene, 3, false);
+  ep.Process(f0.left, f0.right, f0.T_base_cam0, f0.stamp_ns);
+  // An encoder glitch: 0.4 rad in 1/30 s, and back.
+  const Eigen::Isometry3d glitch = testing::HeadPose(0.4, 0.0);
+  const auto res = ep.Process(f1.left, f1.right, glitch, f1.stamp_ns);
+  EXPECT_EQ(res->mode, FrameMode::kPoseJump);
+  EXPECT_FALSE(res->compared);
+  EXPECT_DOUBLE_EQ(res->recomputed_share, 1.0);
+  EXPECT_EQ(cv::countNonZero(res->unexpected), 0);
+  EXPECT_EQ(ep.Process(f2.left, f2.right, f2.T_base_cam0, f2.stamp_ns)->mode, FrameMode::kPoseJump);
+  EXPECT_EQ(ep.counters().pose_jumps, 2u);
+  const auto next = ep.Process(f3.left, f3.right, f3.T_base_cam0, f3.stamp_ns);
+  EXPECT_EQ(next->mode, FrameMode::kPredicted);
+  EXPECT_LT(next->unexpected_share, 0.005);
+}
+
+TEST(ExpectedPerception, BadInputIsRefusedAndTheStateKept) {
+  const testing::SyntheticScene scene;
+  ExpectedPerception ep(scene.camera(), Params());
+  const Frame f0 = Render(scene, 0, false), f1 = Render(scene, 1, false);
+  ep.Process(f0.left, f0.right, f0.T_base_cam0, f0.stamp_ns);
+  const cv::Mat small = f1.left(cv::Rect(0, 0, 100, 100)).clone();
+  EXPECT_THROW(ep.Process(small, small, f1.T_base_cam0, f1.stamp_ns), std::invalid_argument);
+  cv::Mat float_image;
+  f1.left.convertTo(float_image, CV_32F);
+  EXPECT_THROW(ep.Process(float_image, f1.right, f1.T_base_cam0, f1.stamp_ns),
+               std::invalid_argument);
+  Eigen::Isometry3d nan_pose = f1.T_base_cam0;
+  nan_pose.translation().y() = std::nan("");
+  EXPECT_THROW(ep.Process(f1.left, f1.right, nan_pose, f1.stamp_ns), std::invalid_argument);
+  Eigen::Isometry3d sheared = f1.T_base_cam0;
+  sheared.matrix()(0, 1) += 0.1;
+  EXPECT_THROW(ep.Process(f1.left, f1.right, sheared, f1.stamp_ns), std::invalid_argument);
+  EXPECT_THROW(ep.Process(f1.left, f1.right, f1.T_base_cam0, f0.stamp_ns),
+               std::invalid_argument);  // not after the previous frame
+  EXPECT_EQ(ep.counters().frames, 1u);
+  const auto res = ep.Process(f1.left, f1.right, f1.T_base_cam0, f1.stamp_ns);
+  EXPECT_EQ(res->mode, FrameMode::kPredicted);
+  EXPECT_THROW(ExpectedPerception(stereo::RectifiedGeometry{}, Params()), std::invalid_argument);
+  EpParams bad = Params();
+  bad.comparator.lambda = -1;
+  EXPECT_THROW(ExpectedPerception(scene.camera(), bad), std::invalid_argument);
+}
+
+TEST(ExpectedPerception, ResultsNeverChangeAfterwards) {
+  const testing::SyntheticScene scene;
+  ExpectedPerception ep(scene.camera(), Params());
+  std::shared_ptr<const ep::EpResult> kept;
+  cv::Mat disparity, unexpected, error;
+  for (int k = 0; k < 6; ++k) {
+    const Frame f = Render(scene, k, true);
+    const auto res = ep.Process(f.left, f.right, f.T_base_cam0, f.stamp_ns);
+    if (k == 2) {
+      kept = res;
+      disparity = res->disparity.clone();
+      unexpected = res->unexpected.clone();
+      error = res->error.clone();
+    }
+  }
+  // Equal, or NaN in both (OpenCV's comparisons are false for NaN).
+  const cv::Mat same_d = (kept->disparity == disparity) |
+                         (~(disparity == disparity) & ~(kept->disparity == kept->disparity));
+  EXPECT_EQ(cv::countNonZero(same_d), static_cast<int>(disparity.total()));
+  EXPECT_EQ(cv::norm(kept->unexpected, unexpected, cv::NORM_INF), 0.0);
+  EXPECT_EQ(cv::norm(kept->error, error, cv::NORM_INF), 0.0);
+}
+
+TEST(ExpectedPerception, RefreshPolicies) {
+  const testing::SyntheticScene scene;
+  EpParams every = Params();
+  every.refresh.every_n_frames = 3;
+  ExpectedPerception ep(scene.camera(), every);
+  std::vector<FrameMode> modes;
+  for (int k = 0; k < 7; ++k) {
+    const Frame f = Render(scene, k, false);
+    modes.push_back(ep.Process(f.left, f.right, f.T_base_cam0, f.stamp_ns)->mode);
+  }
+  const std::vector<FrameMode> expected = {
+      FrameMode::kFirst,           FrameMode::kPredicted,
+      FrameMode::kPredicted,       FrameMode::kRefreshScheduled,
+      FrameMode::kPredicted,       FrameMode::kPredicted,
+      FrameMode::kRefreshScheduled};
+  EXPECT_EQ(modes, expected);
+  EpParams share = Params();
+  share.refresh.max_recompute_share = 1e-4;  // anything at all triggers a full frame
+  ExpectedPerception ep2(scene.camera(), share);
+  const Frame f0 = Render(scene, 0, false), f1 = Render(scene, 1, false);
+  ep2.Process(f0.left, f0.right, f0.T_base_cam0, f0.stamp_ns);
+  const auto res = ep2.Process(f1.left, f1.right, f1.T_base_cam0, f1.stamp_ns);
+  EXPECT_EQ(res->mode, FrameMode::kRefreshShare);
+  EXPECT_TRUE(res->compared);  // the comparison still ran
+  EXPECT_EQ(ep2.counters().full_share, 1u);
+}
+
+// No burn-in: after a pan back and forth with the square passing, the map of the last frames
+// is no worse than the map of the first ones.
+TEST(ExpectedPerception, TheMapDoesNotDrift) {
+  const testing::SyntheticScene scene;
+  ExpectedPerception ep(scene.camera(), Params());
+  stereo::DisparityScore early, late;
+  const auto add = [](stereo::DisparityScore* total, const stereo::DisparityScore& s) {
+    total->gt_pixels += s.gt_pixels;
+    total->filled += s.filled;
+    total->bad_filled += s.bad_filled;
+  };
+  for (int k = 0; k < 44; ++k) {
+    const Frame f = Render(scene, k, k < 20);
+    const auto res = ep.Process(f.left, f.right, f.T_base_cam0, f.stamp_ns);
+    const auto s = stereo::ScoreDisparity(res->disparity, f.disparity);
+    if (k >= 1 && k < 11) add(&early, s);
+    if (k >= 34) add(&late, s);
+  }
+  EXPECT_LE(late.bad_counting_unknown(), early.bad_counting_unknown() + 0.01);
+}
+
+TEST(EpSettings, SetsListsAndRefuses) {
+  EpParams p;
+  ep::SetEpParam(&p, "comparator.threshold_grey", "21.5");
+  ep::SetEpParam(&p, "refresh.rolling_period_frames", "7");
+  ep::SetEpParam(&p, "comparator.compensate_exposure", "false");
+  EXPECT_DOUBLE_EQ(p.comparator.threshold_grey, 21.5);
+  EXPECT_EQ(p.refresh.rolling_period_frames, 7);
+  EXPECT_FALSE(p.comparator.compensate_exposure);
+  bool found = false;
+  for (const auto& [k, v] : ep::ListEpParams(p)) {
+    if (k == "comparator.lambda") {
+      EXPECT_EQ(v, "10");  // the paper's forgetting factor
+      found = true;
+    }
+  }
+  EXPECT_TRUE(found);
+  EXPECT_THROW(ep::SetEpParam(&p, "comparator.nope", "1"), std::invalid_argument);
+  EXPECT_THROW(ep::SetEpParam(&p, "comparator.lambda", "ten"), std::invalid_argument);
+  EXPECT_THROW(ep::SetEpParam(&p, "comparator.lambda", "10 px"), std::invalid_argument);
+  EXPECT_THROW(ep::SetEpParam(&p, "remeasure_dynamic", "maybe"), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace epmap
