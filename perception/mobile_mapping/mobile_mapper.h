@@ -178,6 +178,7 @@ class MobileMapper {
   const occupancy::LayeredGrid& grid() const { return grid_; }
   const perceptual_map::PerceptualMapper& perceptual() const { return perceptual_; }
   const MobileMapperParams& params() const { return params_; }
+  const stereo::RectifiedGeometry& camera() const { return camera_; }
 
  private:
   struct FramePoints {
