@@ -5,6 +5,10 @@
 // against the ground truth. A layer that does not exist is INVALID_ARGUMENT; before any
 // odometry the maps are FAILED_PRECONDITION.
 
+#include <epmap_dds/CameraInfoPubSubTypes.h>
+#include <epmap_dds/ImagePubSubTypes.h>
+#include <epmap_dds/JointStatePubSubTypes.h>
+#include <epmap_dds/OdometryPubSubTypes.h>
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
 
@@ -12,9 +16,15 @@
 #include <fstream>
 #include <numbers>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <sstream>
+#include <thread>
 
 #include "common/dataset/dataset.h"
+#include "common/dds/endpoints.h"
+#include "common/dds/participant.h"
+#include "common/dds/ros_conversions.h"
+#include "common/dds/topics.h"
 #include "perception/mobile_mapping/map_evaluation.h"
 #include "tests/support/epmapd_fixture.h"
 
@@ -212,6 +222,160 @@ TEST(MapsE2E, BuildingRunGivesMapsNearTheTrueWalls) {
     EXPECT_LT(position_error, 0.3) << out;
     EXPECT_LT(heading_error, 2.0 * std::numbers::pi / 180) << out;
   }
+}
+
+// A hand-made robot on DDS: a textured plane 1 m ahead, odometry and the pan joint at every
+// image stamp, so that single samples can be made bad.
+class MobileBasePublisher {
+ public:
+  explicit MobileBasePublisher(uint32_t domain)
+      : participant_(domain, "maps-bad-input-test"),
+        left_(participant_, dds::TopicNames().left_image),
+        right_(participant_, dds::TopicNames().right_image),
+        left_info_(participant_, dds::TopicNames().left_info),
+        right_info_(participant_, dds::TopicNames().right_info),
+        joints_(participant_, dds::TopicNames().joints),
+        odom_(participant_, dds::TopicNames().odom) {}
+
+  bool WaitMatched() {
+    const auto t = std::chrono::seconds(15);
+    const bool ok = left_.WaitForReaders(1, t) && right_.WaitForReaders(1, t) &&
+                    left_info_.WaitForReaders(1, t) && right_info_.WaitForReaders(1, t) &&
+                    joints_.WaitForReaders(1, t) && odom_.WaitForReaders(1, t);
+    std::this_thread::sleep_for(std::chrono::milliseconds(500));
+    return ok;
+  }
+
+  void Odometry(int64_t stamp, double x) {
+    nav_msgs::msg::Odometry msg;
+    dds::ToOdometry({stamp, x, 0.0, 0.0}, "odom", "base_link", &msg);
+    odom_.Write(msg);
+    Pace();
+  }
+
+  // One frame: odometry and pan at its stamp, then CameraInfo and the pair.
+  void Frame(int64_t stamp, double x, double pan, bool blank) {
+    Odometry(stamp, x);
+    sensor_msgs::msg::JointState joints;
+    dds::ToJointState({stamp, {"pan"}, {pan}}, &joints);
+    joints_.Write(joints);
+    Pace();
+    sensor_msgs::msg::CameraInfo info;
+    dds::ToCameraInfo(Camera(0.0), stamp, "cam0_optical", &info);
+    left_info_.Write(info);
+    dds::ToCameraInfo(Camera(kBaseline), stamp, "cam1_optical", &info);
+    right_info_.Write(info);
+    cv::Mat left(kHeight, kWidth, CV_8UC1, cv::Scalar(128)), right = left.clone();
+    if (!blank) {
+      // Vertical bars of random grey: a plane at fx B / d = 1 m (d = 10 px).
+      cv::Mat wide(kHeight, kWidth + 20, CV_8UC1);
+      cv::RNG rng(static_cast<uint64_t>(stamp));
+      for (int c = 0; c < wide.cols;) {
+        const int w = 3 + rng.uniform(0, 6);
+        wide.colRange(c, std::min(wide.cols, c + w)).setTo(rng.uniform(30, 230));
+        c += w;
+      }
+      cv::GaussianBlur(wide, wide, cv::Size(0, 0), 0.8);
+      left = wide.colRange(10, 10 + kWidth).clone();
+      right = wide.colRange(20, 20 + kWidth).clone();
+    }
+    sensor_msgs::msg::Image image;
+    dds::MatToImage(left, stamp, "cam0_optical", &image);
+    left_.Write(image);
+    Pace();
+    dds::MatToImage(right, stamp, "cam1_optical", &image);
+    right_.Write(image);
+    Pace();
+  }
+
+ private:
+  static constexpr int kWidth = 160, kHeight = 120;
+  static constexpr double kBaseline = 0.1;
+  static dds::CameraCalibration Camera(double baseline) {
+    dds::CameraCalibration c;
+    c.width = kWidth;
+    c.height = kHeight;
+    c.d = {0, 0, 0, 0, 0};
+    c.k = {100, 0, kWidth / 2.0, 0, 100, kHeight / 2.0, 0, 0, 1};
+    c.p = {100, 0, kWidth / 2.0, -100 * baseline, 0, 100, kHeight / 2.0, 0, 0, 0, 1, 0};
+    return c;
+  }
+  static void Pace() { std::this_thread::sleep_for(std::chrono::milliseconds(20)); }
+
+  dds::Participant participant_;
+  dds::Writer<sensor_msgs::msg::Image, sensor_msgs::msg::ImagePubSubType> left_, right_;
+  dds::Writer<sensor_msgs::msg::CameraInfo, sensor_msgs::msg::CameraInfoPubSubType> left_info_,
+      right_info_;
+  dds::Writer<sensor_msgs::msg::JointState, sensor_msgs::msg::JointStatePubSubType> joints_;
+  dds::Writer<nav_msgs::msg::Odometry, nav_msgs::msg::OdometryPubSubType> odom_;
+};
+
+// Odometry jumping or going back in time, a pan outside the URDF's limits and a key frame
+// without edges: each counted under its reason, the maps keep every good key frame.
+TEST(MapsE2E, BadInputIsCountedAndTheMapsStayIntact) {
+  const auto work = testing::FreshTempDir("maps-bad-input");
+  const uint32_t domain = testing::UniqueDomainId(62);
+  // The building robot's URDF (pan limits +-2.6 rad), from a two-frame recording.
+  const auto rec = work / "rec";
+  const auto [rec_code, rec_out] = testing::RunToCompletion(
+      testing::BinDir() / "epmap-sim",
+      {"record", "--scenario", "building", "--frames", "2", "--out", rec.string()},
+      work / "record.log", std::chrono::seconds(60));
+  ASSERT_EQ(rec_code, 0) << rec_out;
+  testing::Epmapd epmapd(domain, {"--urdf", (rec / "mav0" / "kinematics.urdf").string()}, work);
+  ASSERT_TRUE(epmapd.WaitReady()) << epmapd.process().Output();
+  MobileBasePublisher pub(domain);
+  ASSERT_TRUE(pub.WaitMatched());
+
+  const int64_t t0 = 1'700'000'000'000'000'000;
+  const auto stamp = [&](int i) { return t0 + i * 200'000'000LL; };
+  int good = 0;
+  for (int i = 0; i < 6; ++i, ++good) pub.Frame(stamp(i), 0.3 * i, 0.0, false);
+  pub.Frame(stamp(6), 0.3 * 6 + 5.0, 0.0, false);  // odometry jumps 5 m for one sample
+  pub.Frame(stamp(7), 0.3 * 7, 3.0, false);        // pan beyond its 2.6 rad limit
+  pub.Odometry(stamp(7) - 50'000'000, 0.3 * 7);    // odometry back in time
+  pub.Frame(stamp(8), 0.3 * 8, 0.0, true);         // nothing to see: no edges
+  ++good;
+  pub.Frame(stamp(9), 0.3 * 9, 0.0, false);
+  ++good;
+
+  const auto status = epmapd.WaitStatus(
+      [&](const v1::ServiceStatus& s) {
+        return testing::Epmapd::Count(s.events(), "maps_key_frames") +
+                   testing::Epmapd::Count(s.rejected_by_reason(), "maps:odometry_jump") +
+                   testing::Epmapd::Count(s.rejected_by_reason(), "maps:joint_out_of_range") >=
+               static_cast<uint64_t>(good + 2);
+      },
+      std::chrono::seconds(30));
+  const auto count = [&](const auto& counters, const char* reason) {
+    return testing::Epmapd::Count(counters, reason);
+  };
+  EXPECT_EQ(status.mode(), "mobile-base");
+  EXPECT_EQ(count(status.rejected_by_reason(), "maps:odometry_jump"), 1u) << status.DebugString();
+  EXPECT_EQ(count(status.rejected_by_reason(), "maps:joint_out_of_range"), 1u)
+      << status.DebugString();
+  EXPECT_GE(count(status.rejected_by_reason(), "odometry:stamp_not_increasing"), 1u)
+      << status.DebugString();
+  EXPECT_EQ(count(status.events(), "maps_key_frame_without_edges"), 1u) << status.DebugString();
+  EXPECT_EQ(count(status.events(), "maps_key_frames"), static_cast<uint64_t>(good))
+      << status.DebugString();
+
+  // The maps answer with every good key frame and the newest pose.
+  grpc::ClientContext context;
+  v1::PoseEstimate pose;
+  ASSERT_TRUE(epmapd.stub().GetPose(&context, {}, &pose).ok());
+  EXPECT_EQ(pose.keyframes(), static_cast<uint32_t>(good));
+  EXPECT_NEAR(pose.odometry().x(), 0.3 * 9, 1e-6);
+  EXPECT_TRUE(std::isfinite(pose.corrected().x()) && std::isfinite(pose.corrected().theta()));
+  EXPECT_LT(std::abs(pose.difference().theta()), 0.05);
+  grpc::ClientContext grid_context;
+  v1::GetOccupancyGridRequest request;
+  request.set_layer(3);  // the default grid has 3 height bands
+  v1::OccupancyGrid grid;
+  const auto bad_layer = epmapd.stub().GetOccupancyGrid(&grid_context, request, &grid);
+  EXPECT_EQ(bad_layer.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(bad_layer.error_message().find("layers 0..2"), std::string::npos)
+      << bad_layer.error_message();
 }
 
 }  // namespace
