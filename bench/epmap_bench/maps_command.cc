@@ -556,7 +556,8 @@ int RunCommand(int argc, char** argv) {
                  "similarity");
   app.add_option("--floor-z", floor_z, "floor height in the base frame (m)");
   app.add_option("--view-min-key-frames", view_min,
-                 "key frames a stop needs to make a view (0 = 2 if the run pans at stops, else 1)");
+                 "key frames a stop needs to make a view (0 = automatic, as epmapd: 1 until the "
+                 "head pans at a stop, then 2)");
   app.add_option("--max-key-frames", max_frames, "stop after this many key frames");
   app.add_flag("--no-variants", no_variants,
                "skip the runs without heading correction / without any correction");
@@ -568,7 +569,7 @@ int RunCommand(int argc, char** argv) {
 
     epmap::mobile_mapping::MobileMapperParams params;
     params.floor_z_in_base_m = floor_z;
-    params.view_min_key_frames = view_min > 0 ? view_min : (p.panning_stops ? 2 : 1);
+    params.view_min_key_frames = view_min;  // 0: the mapper decides online, as in epmapd
 
     const RunResult main = Run(p, params, true);
     const auto& maps = *main.maps;

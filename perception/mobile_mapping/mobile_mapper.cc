@@ -45,8 +45,8 @@ void MobileMapperParams::Validate() const {
   }
   if (!(head_still_rad >= 0))
     throw std::invalid_argument("mobile mapper: head_still_rad must be >= 0");
-  if (view_min_key_frames < 1) {
-    throw std::invalid_argument("mobile mapper: view_min_key_frames must be >= 1");
+  if (view_min_key_frames < 0) {
+    throw std::invalid_argument("mobile mapper: view_min_key_frames must be >= 0 (0 = automatic)");
   }
   if (!(max_odometry_step_m > 0) || !(max_odometry_step_rad > 0) || !(max_odometry_speed_mps > 0)) {
     throw std::invalid_argument("mobile mapper: odometry limits must be > 0");
@@ -155,6 +155,13 @@ KeyFrameReport MobileMapper::AddKeyFrame(const KeyFrame& f) {
     if (std::abs(change.angle()) < params_.head_still_rad) {
       T_base_cam_heading = previous_features_->T_base_cam;
     }
+    // A panning stop: the head turned while the base stood (the thresholds epmap-bench maps
+    // uses to detect panning stops in a whole dataset).
+    if (!poses_.empty() && std::abs(change.angle()) > 0.05 &&
+        (poses_.latest().T_world_base_odometry.inverse() * f.T_odom_base).translation().norm() <
+            0.005) {
+      seen_panning_stop_ = true;
+    }
   }
   localisation::KeyFrameFeatures features = tracker_.Detect(f.left, f.right, T_base_cam_heading);
   report.features = features.features.size();
@@ -233,7 +240,10 @@ void MobileMapper::CloseGroup(KeyFrameReport* report) {
   group_.open = false;
   report->group_closed = true;
   ++counters_.groups;
-  if (static_cast<int>(group_.frames.size()) < params_.view_min_key_frames) {
+  const int min_key_frames = params_.view_min_key_frames > 0 ? params_.view_min_key_frames
+                             : seen_panning_stop_            ? 2
+                                                             : 1;
+  if (static_cast<int>(group_.frames.size()) < min_key_frames) {
     ++counters_.groups_too_short;
     group_.frames.clear();
     return;

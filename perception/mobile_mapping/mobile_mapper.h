@@ -99,7 +99,9 @@ struct MobileMapperParams {
   double correlation_max_shift_m = 0.25;
 
   // Groups of fewer key frames are not views (2+: only panning stops make views; 1: every
-  // key frame where the base stands is a view, for a robot that never stops to pan).
+  // key frame where the base stands is a view, for a robot that never stops to pan; 0:
+  // automatic, 1 until the head has been seen panning while the base stood still, 2 from then
+  // on, which is what the service uses: it cannot know the robot's habits in advance).
   int view_min_key_frames = 1;
 
   // Input checks between consecutive accepted key frames.
@@ -204,6 +206,7 @@ class MobileMapper {
   perceptual_map::PerceptualMapper perceptual_;
   occupancy::LayeredGrid grid_;
   std::optional<localisation::KeyFrameFeatures> previous_features_;
+  bool seen_panning_stop_ = false;  // for view_min_key_frames = 0
   Group group_;
   MapperCounters counters_;
   int64_t last_stamp_ns_ = 0;

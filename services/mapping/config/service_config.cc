@@ -234,7 +234,7 @@ void ServiceConfig::Validate() const {
       bad("maps.key_frame_min_translation_m, key_frame_min_rotation_rad and key_frame_min_pan_rad "
           "must be positive");
     }
-    if (m.view_min_key_frames < 1) bad("maps.view_min_key_frames must be >= 1");
+    if (m.view_min_key_frames < 0) bad("maps.view_min_key_frames must be >= 0 (0 = automatic)");
     if (!(m.max_odometry_step_m > 0) || !(m.max_odometry_step_rad > 0) ||
         !(m.max_odometry_speed_mps > 0)) {
       bad("maps.max_odometry_step_m, max_odometry_step_rad and max_odometry_speed_mps must be "

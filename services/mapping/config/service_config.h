@@ -67,7 +67,9 @@ struct MapsSettings {
   double key_frame_min_pan_rad = 0.15;
   bool visual_heading = true;   // paper 002, Sec. 3.3: heading corrected from the images
   bool map_correlation = true;  // paper 002, Sec. 4: position corrected at each stop
-  int view_min_key_frames = 1;  // key frames at one stop that make a perceptual-map view
+  // Key frames at one stop that make a perceptual-map view; 0 = automatic (1 until the head
+  // is seen panning at a stop, then 2: only panning stops make views).
+  int view_min_key_frames = 0;
   // Key frames whose odometry moved more than this since the last accepted one are refused
   // (a glitch, counted in rejected_by_reason as maps:odometry_jump).
   double max_odometry_step_m = 2.0;

@@ -65,10 +65,10 @@ TEST(ServiceConfig, MapsSectionIsReadAndChecked) {
   EXPECT_DOUBLE_EQ(c.maps.key_frame_min_translation_m, 0.5);
   EXPECT_FALSE(c.maps.visual_heading);
   EXPECT_NO_THROW(c.Validate());
-  c.maps.view_min_key_frames = 0;
+  c.maps.view_min_key_frames = -1;
   try {
     c.Validate();
-    FAIL() << "view_min_key_frames 0 must be refused";
+    FAIL() << "view_min_key_frames -1 must be refused";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("maps.view_min_key_frames"), std::string::npos);
   }

@@ -113,6 +113,20 @@ TEST_F(MobileMapperTest, BuildsBothMapsAndCorrectsTheHeading) {
   EXPECT_GE(snap->perceptual.path.size(), 3u);
 }
 
+// view_min_key_frames = 0 (the service's setting): this run pans at its stops, so once it has
+// been seen panning the moving key frames make no views (with 1 every group would be a view).
+TEST_F(MobileMapperTest, AutomaticViewSizeFollowsPanningStops) {
+  auto p = Params();
+  p.view_min_key_frames = 0;
+  MobileMapper mapper(testing::BumblebeeLikeCamera(), p);
+  for (const auto& f : *frames_) ASSERT_TRUE(mapper.AddKeyFrame(f).accepted);
+  mapper.Flush();
+  const auto& c = mapper.counters();
+  EXPECT_GE(c.views, 3u);
+  EXPECT_GT(c.groups_too_short, 0u);
+  EXPECT_EQ(c.views + c.groups_too_short, c.groups);
+}
+
 TEST_F(MobileMapperTest, RefusesBadKeyFramesAndKeepsTheMapsIntact) {
   MobileMapper mapper(testing::BumblebeeLikeCamera(), Params());
   const size_t half = frames_->size() / 2;
@@ -194,7 +208,7 @@ TEST_F(MobileMapperTest, AStopWithNoEdgesIsCountedNotFatal) {
 TEST(MobileMapper, BadConfigurationIsRefused) {
   auto cam = testing::BumblebeeLikeCamera();
   mobile_mapping::MobileMapperParams p;
-  p.view_min_key_frames = 0;
+  p.view_min_key_frames = -1;
   EXPECT_THROW(MobileMapper(cam, p), std::invalid_argument);
   cam.baseline_m = 0;
   EXPECT_THROW(MobileMapper(cam, {}), std::invalid_argument);
