@@ -100,6 +100,13 @@ grpc::Status MapServiceImpl::GetOccupancyGrid(grpc::ServerContext*,
     layer = static_cast<int>(request->layer());
   }
   const occupancy::GridExport g = maps->grid.Export(layer);
+  if (g.width == 0 || g.height == 0) {
+    // A stop's points join the grid when the base moves on from it; an empty map is no map.
+    return {grpc::StatusCode::FAILED_PRECONDITION,
+            std::string(layer ? "layer " + std::to_string(*layer) + " of the" : "the") +
+                " occupancy grid has no known cell yet (a stop's points join it when the base "
+                "moves on)"};
+  }
   out->set_stamp_ns(maps->stamp_ns);
   out->set_resolution_m(g.resolution_m);
   out->mutable_origin()->set_x(g.origin_x);
