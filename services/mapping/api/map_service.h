@@ -26,6 +26,15 @@ class MapServiceImpl final : public v1::MapService::Service {
   grpc::Status WatchUnexpected(grpc::ServerContext* context,
                                const v1::WatchUnexpectedRequest* request,
                                grpc::ServerWriter<v1::UnexpectedEvent>* writer) override;
+  // Mobile-base mode: the maps of the newest key frame (map_service_maps.cc).
+  grpc::Status GetPerceptualMap(grpc::ServerContext* context,
+                                const v1::GetPerceptualMapRequest* request,
+                                v1::PerceptualMap* response) override;
+  grpc::Status GetOccupancyGrid(grpc::ServerContext* context,
+                                const v1::GetOccupancyGridRequest* request,
+                                v1::OccupancyGrid* response) override;
+  grpc::Status GetPose(grpc::ServerContext* context, const v1::GetPoseRequest* request,
+                       v1::PoseEstimate* response) override;
 
  private:
   MappingService& service_;

@@ -155,6 +155,20 @@ void Apply(const YAML::Node& root, ServiceConfig& c) {
     s.RejectUnknownKeys();
   }
   {
+    auto s = top.Sub("maps");
+    s.Get("enabled", c.maps.enabled);
+    s.Get("key_frame_min_translation_m", c.maps.key_frame_min_translation_m);
+    s.Get("key_frame_min_rotation_rad", c.maps.key_frame_min_rotation_rad);
+    s.Get("key_frame_min_pan_rad", c.maps.key_frame_min_pan_rad);
+    s.Get("visual_heading", c.maps.visual_heading);
+    s.Get("map_correlation", c.maps.map_correlation);
+    s.Get("view_min_key_frames", c.maps.view_min_key_frames);
+    s.Get("max_odometry_step_m", c.maps.max_odometry_step_m);
+    s.Get("max_odometry_step_rad", c.maps.max_odometry_step_rad);
+    s.Get("max_odometry_speed_mps", c.maps.max_odometry_speed_mps);
+    s.RejectUnknownKeys();
+  }
+  {
     auto s = top.Sub("log");
     s.Get("level", c.log_level);
     s.RejectUnknownKeys();
@@ -212,6 +226,20 @@ void ServiceConfig::Validate() const {
     MakeEpParams(*this).Validate();
   } catch (const std::invalid_argument& e) {
     bad(std::string("ep.params: ") + e.what());
+  }
+  {
+    const auto& m = maps;
+    if (!(m.key_frame_min_translation_m > 0) || !(m.key_frame_min_rotation_rad > 0) ||
+        !(m.key_frame_min_pan_rad > 0)) {
+      bad("maps.key_frame_min_translation_m, key_frame_min_rotation_rad and key_frame_min_pan_rad "
+          "must be positive");
+    }
+    if (m.view_min_key_frames < 0) bad("maps.view_min_key_frames must be >= 0 (0 = automatic)");
+    if (!(m.max_odometry_step_m > 0) || !(m.max_odometry_step_rad > 0) ||
+        !(m.max_odometry_speed_mps > 0)) {
+      bad("maps.max_odometry_step_m, max_odometry_step_rad and max_odometry_speed_mps must be "
+          "positive");
+    }
   }
   static const std::set<std::string> kLevels{"trace", "debug", "info", "warn", "error"};
   if (!kLevels.count(log_level)) bad("log.level must be trace, debug, info, warn or error");
@@ -339,6 +367,20 @@ std::string ToYaml(const ServiceConfig& c) {
   out << YAML::Key << "params" << YAML::Value << YAML::BeginMap;
   for (const auto& [key, value] : c.ep.params) out << YAML::Key << key << YAML::Value << value;
   out << YAML::EndMap << YAML::EndMap;
+  out << YAML::Key << "maps" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "enabled" << YAML::Value << c.maps.enabled;
+  out << YAML::Key << "key_frame_min_translation_m" << YAML::Value
+      << c.maps.key_frame_min_translation_m;
+  out << YAML::Key << "key_frame_min_rotation_rad" << YAML::Value
+      << c.maps.key_frame_min_rotation_rad;
+  out << YAML::Key << "key_frame_min_pan_rad" << YAML::Value << c.maps.key_frame_min_pan_rad;
+  out << YAML::Key << "visual_heading" << YAML::Value << c.maps.visual_heading;
+  out << YAML::Key << "map_correlation" << YAML::Value << c.maps.map_correlation;
+  out << YAML::Key << "view_min_key_frames" << YAML::Value << c.maps.view_min_key_frames;
+  out << YAML::Key << "max_odometry_step_m" << YAML::Value << c.maps.max_odometry_step_m;
+  out << YAML::Key << "max_odometry_step_rad" << YAML::Value << c.maps.max_odometry_step_rad;
+  out << YAML::Key << "max_odometry_speed_mps" << YAML::Value << c.maps.max_odometry_speed_mps;
+  out << YAML::EndMap;
   out << YAML::Key << "log" << YAML::Value << YAML::BeginMap << YAML::Key << "level" << YAML::Value
       << c.log_level << YAML::EndMap;
   out << YAML::EndMap;

@@ -56,6 +56,27 @@ struct EpSettings {
   std::map<std::string, std::string> params;
 };
 
+// The maps of a mobile base (issue 6; perception/mobile_mapping/README.md): built in
+// mobile-base mode from the rectified images, rt/odom and the head's joints.
+struct MapsSettings {
+  bool enabled = true;  // false: no maps in mobile-base mode (the RPCs answer FAILED_PRECONDITION)
+  // A frame becomes a key frame when, since the last one, the base moved or turned or the head
+  // panned this much (mobile_mapping::KeyFrameSelectorParams).
+  double key_frame_min_translation_m = 0.25;
+  double key_frame_min_rotation_rad = 0.15;
+  double key_frame_min_pan_rad = 0.15;
+  bool visual_heading = true;   // paper 002, Sec. 3.3: heading corrected from the images
+  bool map_correlation = true;  // paper 002, Sec. 4: position corrected at each stop
+  // Key frames at one stop that make a perceptual-map view; 0 = automatic (1 until the head
+  // is seen panning at a stop, then 2: only panning stops make views).
+  int view_min_key_frames = 0;
+  // Key frames whose odometry moved more than this since the last accepted one are refused
+  // (a glitch, counted in rejected_by_reason as maps:odometry_jump).
+  double max_odometry_step_m = 2.0;
+  double max_odometry_step_rad = 1.6;
+  double max_odometry_speed_mps = 3.0;
+};
+
 struct ServiceConfig {
   // --- API ---
   std::string listen = "127.0.0.1:50051";  // gRPC address
@@ -89,6 +110,9 @@ struct ServiceConfig {
 
   // --- expected perception ---
   EpSettings ep;
+
+  // --- maps (mobile-base mode) ---
+  MapsSettings maps;
 
   // --- logging ---
   std::string log_level = "info";  // trace | debug | info | warn | error

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "perception/ep/expected_perception.h"
+#include "perception/mobile_mapping/mobile_mapper.h"
 #include "perception/stereo/rectification.h"
 #include "services/mapping/pipeline/unexpected_events.h"
 
@@ -36,6 +37,10 @@ struct MapSnapshot {
   // What moved on its own (null when EP is disabled), with centroids in the base frame as the
   // active eye-hand model corrects them.
   std::shared_ptr<const UnexpectedFrame> unexpected;
+  // Mobile-base mode: the perceptual map, occupancy grid and poses after the newest key frame
+  // (null before the first key frame, or when not in mobile-base mode). Shared between
+  // snapshots until the next key frame changes the maps.
+  std::shared_ptr<const mobile_mapping::MapsSnapshot> maps;
 };
 
 // Holds the newest snapshot; readers may wait for one newer than a stamp or frame.

@@ -3,7 +3,11 @@
 #include <spdlog/spdlog.h>
 
 #include <cmath>
+#include <fstream>
 #include <opencv2/imgproc.hpp>
+#include <sstream>
+
+#include "perception/mobile_mapping/joint_limits.h"
 
 namespace epmap::mapping {
 
@@ -65,6 +69,13 @@ Pipeline::Pipeline(const ServiceConfig& config, BoundedQueue<StereoFrame>& queue
     chain_ = kinematics::UrdfChain::FromFile(config.urdf);
     spdlog::info("kinematic chain from {}: root '{}', joints [{}]", config.urdf,
                  chain_->root_link(), fmt::join(chain_->joint_names(), ", "));
+    if (!chain_->joint_names().empty()) {
+      // The maps refuse key frames whose joints (the pan) read outside these limits.
+      std::ifstream in(config.urdf);
+      std::stringstream xml;
+      xml << in.rdbuf();
+      joint_limits_ = mobile_mapping::JointLimitsFromUrdf(xml.str(), chain_->joint_names());
+    }
   }
   SetUpPoseSource();
 }
@@ -190,6 +201,11 @@ void Pipeline::Process(StereoFrame& frame) {
     full_refreshes_++;
     snapshot->T_base_cam0 = pose;
     snapshot->recomputed_share = 1.0;
+  }
+  if (config_.maps.enabled && mode() == "mobile-base") {
+    t0 = Clock::now();
+    RunMaps(frame, *rectifier, left, right, *snapshot);
+    stage_ms_.Add("maps", MsSince(t0));
   }
   snapshot->valid_share = ValidShare(snapshot->disparity);
   stage_ms_.Add("total", MsSince(t_start));

@@ -11,6 +11,8 @@
 #include "perception/ep/expected_perception.h"
 #include "perception/internal_model/pose_source.h"
 #include "perception/kinematics/urdf_chain.h"
+#include "perception/mobile_mapping/key_frame_selector.h"
+#include "perception/mobile_mapping/mobile_mapper.h"
 #include "perception/stereo/rectification.h"
 #include "perception/stereo/sgbm.h"
 #include "services/mapping/calibration/active_models.h"
@@ -67,6 +69,10 @@ class Pipeline {
                              const cv::Mat& left, const cv::Mat& right,
                              const std::optional<Eigen::Isometry3d>& raw_pose,
                              const std::string& pose_reason, MapSnapshot& snapshot);
+  // Mobile-base mode: hands key frames to the mobile mapper and puts its maps into the
+  // snapshot (pipeline_maps.cc).
+  void RunMaps(const StereoFrame& frame, const stereo::Rectifier& rectifier, const cv::Mat& left,
+               const cv::Mat& right, MapSnapshot& snapshot);
   // The rectifier under the active stereo model, or nullptr (with a counted rejection); only
   // called when a stereo model is active (pipeline_calibration.cc).
   const stereo::Rectifier* StereoModelRectifier(const StereoFrame& frame,
@@ -88,6 +94,12 @@ class Pipeline {
   UnexpectedEventHub unexpected_hub_;
   std::optional<stereo::Rectifier> rectifier_;
   uint64_t rectifier_version_ = ~0ull;
+
+  // Maps of the mobile base (pipeline_maps.cc): created at the first key frame.
+  std::unique_ptr<mobile_mapping::MobileMapper> mapper_;
+  std::optional<mobile_mapping::KeyFrameSelector> key_frames_;
+  std::vector<mobile_mapping::JointLimit> joint_limits_;  // of the chain's joints, from the URDF
+  std::shared_ptr<const mobile_mapping::MapsSnapshot> maps_;
 
   const ActiveModels* active_models_ = nullptr;
   RawFrameTap* frame_tap_ = nullptr;

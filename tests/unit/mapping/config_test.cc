@@ -58,5 +58,26 @@ TEST(ServiceConfig, EmptySectionsKeepDefaults) {
   EXPECT_EQ(c.mode, "auto");
 }
 
+// The maps section (mobile-base mode): read from YAML, and bad values named.
+TEST(ServiceConfig, MapsSectionIsReadAndChecked) {
+  ServiceConfig c;
+  mapping::ApplyYaml("maps:\n  key_frame_min_translation_m: 0.5\n  visual_heading: false\n", c);
+  EXPECT_DOUBLE_EQ(c.maps.key_frame_min_translation_m, 0.5);
+  EXPECT_FALSE(c.maps.visual_heading);
+  EXPECT_NO_THROW(c.Validate());
+  c.maps.view_min_key_frames = -1;
+  try {
+    c.Validate();
+    FAIL() << "view_min_key_frames -1 must be refused";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("maps.view_min_key_frames"), std::string::npos);
+  }
+  ServiceConfig d;
+  d.maps.max_odometry_step_m = -1;
+  EXPECT_THROW(d.Validate(), std::invalid_argument);
+  EXPECT_THROW(mapping::ApplyYaml("maps:\n  key_frame_min_translation: 0.5\n", d),
+               std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace epmap

@@ -1,0 +1,829 @@
+// epmap-bench maps --dataset DIR --out DIR [--json] [--compare PMAP_JSON]: runs a mobile-base
+// dataset (odometry0, joints0 with the pan joint, kinematics.urdf, rectified or not) through
+// the code the service runs (perception/mobile_mapping: the perceptual map of paper 003, the
+// fuzzy occupancy grid and the heading/position correction of paper 002) and writes:
+//   pmap.json   {"segments":[{"id","x1","y1","x2","y2"}],"path":[[x,y]],"boundary":[[x,y]],...}
+//   grid.pgm + grid.yaml   the combined occupancy grid in the ROS map_server layout
+//   poses.csv   #timestamp [ns],x [m],y [m],theta [rad]  (corrected pose per key frame)
+//   pmap.svg, grid.png     pictures to judge by eye (true walls underneath when known)
+// World frame = the robot's start pose (the odometry frame). With ground truth (gt_base_pose0,
+// gt_map/walls.csv) it prints the figures: final heading and position error of the raw
+// odometry and of the corrected pose, wall coverage and stray length of the perceptual map,
+// IoU of the grid's occupied cells with the rasterised walls (with and without the heading
+// correction), and the per-key-frame time of both maps beside full-frame SGBM on the same frames.
+
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <numbers>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "bench/epmap_bench/command_registry.h"
+#include "common/dataset/dataset.h"
+#include "perception/kinematics/urdf_chain.h"
+#include "perception/mobile_mapping/joint_limits.h"
+#include "perception/mobile_mapping/key_frame_selector.h"
+#include "perception/mobile_mapping/map_evaluation.h"
+#include "perception/mobile_mapping/mobile_mapper.h"
+#include "perception/occupancy/map_export.h"
+#include "perception/stereo/rectification.h"
+#include "perception/stereo/sgbm.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using epmap::localisation::HeadingOf;
+using epmap::localisation::MakePose;
+using epmap::localisation::WrapAngle;
+using epmap::mobile_mapping::Segment2;
+
+constexpr double kDeg = 180.0 / std::numbers::pi;
+
+// The dataset turned into what the mapper consumes: the rectified rig, the camera on the base
+// for each frame, odometry at each frame, and which frames are key frames.
+struct Prepared {
+  epmap::dataset::Dataset data;
+  epmap::stereo::RectifiedGeometry camera;
+  std::optional<epmap::stereo::Rectifier> rectifier;
+  Eigen::Isometry3d T_cam0_rect = Eigen::Isometry3d::Identity();
+  std::vector<epmap::mobile_mapping::JointLimit> limits;
+  struct Frame {
+    size_t index;  // into data.frames
+    Eigen::Isometry2d T_odom_base;
+    Eigen::Isometry3d T_base_cam;  // rectified left camera
+    std::vector<double> joints;    // chain joints, in the order of limits
+  };
+  std::vector<Frame> key_frames;
+  size_t frames_without_odometry = 0;
+  size_t frames_without_joints = 0;
+  bool panning_stops = false;
+};
+
+Prepared Prepare(const std::string& path, size_t max_frames) {
+  Prepared p;
+  p.data = epmap::dataset::Load(path);
+  auto& d = p.data;
+  if (d.kind != epmap::dataset::Dataset::Kind::kSequence || d.odometry.empty()) {
+    throw std::runtime_error(path + ": the maps benchmark needs a sequence with odometry0/");
+  }
+  // Rectification: already rectified rigs pass through; others as a ROS driver would do it.
+  if (d.rectified()) {
+    p.camera = {d.cam0.width, d.cam0.height, d.cam0.fu,     d.cam0.fv,
+                d.cam0.cu,    d.cam0.cv,     d.baseline_m()};
+  } else {
+    epmap::stereo::CameraParameters l, r;
+    const cv::Matx33d kl(d.cam0.fu, 0, d.cam0.cu, 0, d.cam0.fv, d.cam0.cv, 0, 0, 1);
+    const cv::Matx33d kr(d.cam1.fu, 0, d.cam1.cu, 0, d.cam1.fv, d.cam1.cv, 0, 0, 1);
+    cv::Matx44d tl, tr;
+    for (int i = 0; i < 16; ++i) {
+      tl.val[i] = d.cam0.T_BS(i / 4, i % 4);
+      tr.val[i] = d.cam1.T_BS(i / 4, i % 4);
+    }
+    epmap::stereo::StereoRectifyFromExtrinsics(kl, d.cam0.distortion, kr, d.cam1.distortion, tl, tr,
+                                               cv::Size(d.cam0.width, d.cam0.height),
+                                               d.cam0.distortion_model, &l, &r);
+    p.rectifier.emplace(l, r);
+    p.camera = p.rectifier->geometry();
+    // x_rect = R x_cam0: the rectified camera is cam0 turned by R^T.
+    Eigen::Matrix3d R;
+    for (int i = 0; i < 9; ++i) R(i / 3, i % 3) = l.r[static_cast<size_t>(i)];
+    p.T_cam0_rect.linear() = R.transpose();
+  }
+  std::optional<epmap::kinematics::UrdfChain> chain;
+  if (d.urdf) {
+    chain.emplace(epmap::kinematics::UrdfChain::FromFile(*d.urdf));
+    if (!chain->joint_names().empty()) {
+      chain->BindJointOrder(d.joint_names);
+      std::ifstream in(*d.urdf);
+      std::stringstream xml;
+      xml << in.rdbuf();
+      p.limits = epmap::mobile_mapping::JointLimitsFromUrdf(xml.str(), chain->joint_names());
+    }
+  }
+  epmap::mobile_mapping::KeyFrameSelector selector;
+  std::optional<Prepared::Frame> previous_key;
+  for (size_t i = 0; i < d.frames.size() && p.key_frames.size() < max_frames; ++i) {
+    const int64_t t = d.frames[i].stamp_ns;
+    const auto odo = epmap::dataset::InterpolatePlanar(d.odometry, t);
+    if (!odo) {
+      ++p.frames_without_odometry;
+      continue;
+    }
+    Prepared::Frame f{i, MakePose(odo->x, odo->y, odo->theta), Eigen::Isometry3d::Identity(), {}};
+    Eigen::Isometry3d T_base_cam0(d.cam0.T_BS);
+    if (chain && !chain->joint_names().empty()) {
+      const auto q = epmap::dataset::InterpolateJoints(d.joints, t);
+      if (!q) {
+        ++p.frames_without_joints;
+        continue;
+      }
+      T_base_cam0 = chain->Cam0Pose(*q);
+      for (const auto& name : chain->joint_names()) {
+        const auto it = std::find(d.joint_names.begin(), d.joint_names.end(), name);
+        f.joints.push_back((*q)[static_cast<size_t>(it - d.joint_names.begin())]);
+      }
+    } else if (chain) {
+      T_base_cam0 = chain->Cam0Pose({});
+    }
+    f.T_base_cam = T_base_cam0 * p.T_cam0_rect;
+    if (!selector.Consider(f.T_odom_base, f.T_base_cam)) continue;
+    if (previous_key) {
+      const Eigen::Isometry2d step = previous_key->T_odom_base.inverse() * f.T_odom_base;
+      const Eigen::AngleAxisd head(previous_key->T_base_cam.linear().transpose() *
+                                   f.T_base_cam.linear());
+      if (step.translation().norm() < 0.005 && std::abs(head.angle()) > 0.05) {
+        p.panning_stops = true;
+      }
+    }
+    previous_key = f;
+    p.key_frames.push_back(f);
+  }
+  if (p.key_frames.empty()) throw std::runtime_error(path + ": no frame has odometry");
+  return p;
+}
+
+struct RunResult {
+  std::shared_ptr<const epmap::mobile_mapping::MapsSnapshot> maps;
+  std::vector<epmap::mobile_mapping::KeyFrameReport> reports;
+  std::vector<double> key_frame_ms;
+  std::vector<double> snapshot_ms;  // building the readers' snapshot after a key frame
+  std::vector<double> sgbm_ms;
+};
+
+RunResult Run(const Prepared& p, epmap::mobile_mapping::MobileMapperParams params, bool time_sgbm) {
+  params.joint_limits = p.limits;
+  epmap::mobile_mapping::MobileMapper mapper(p.camera, params);
+  std::optional<epmap::stereo::SgbmMatcher> sgbm;
+  if (time_sgbm) sgbm.emplace(epmap::stereo::SgbmParams{});
+  RunResult out;
+  for (const auto& f : p.key_frames) {
+    const auto& frame = p.data.frames[f.index];
+    cv::Mat left = cv::imread(frame.left.string(), cv::IMREAD_GRAYSCALE);
+    cv::Mat right = cv::imread(frame.right.string(), cv::IMREAD_GRAYSCALE);
+    if (p.rectifier && !left.empty() && !right.empty()) {
+      cv::Mat l, r;
+      p.rectifier->Rectify(left, right, l, r);
+      left = l;
+      right = r;
+    }
+    epmap::mobile_mapping::KeyFrame kf;
+    kf.stamp_ns = frame.stamp_ns;
+    kf.left = left;
+    kf.right = right;
+    kf.T_odom_base = f.T_odom_base;
+    kf.T_base_cam = f.T_base_cam;
+    kf.joint_positions = f.joints;
+    const auto t0 = std::chrono::steady_clock::now();
+    out.reports.push_back(mapper.AddKeyFrame(kf));
+    const auto t1 = std::chrono::steady_clock::now();
+    out.key_frame_ms.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
+    if (time_sgbm) {
+      // What the service does after each key frame: publish an immutable snapshot.
+      const auto s0 = std::chrono::steady_clock::now();
+      (void)mapper.Snapshot();
+      out.snapshot_ms.push_back(
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - s0).count());
+    }
+    if (sgbm && !left.empty()) {
+      const auto s0 = std::chrono::steady_clock::now();
+      (void)sgbm->Compute(left, right);
+      out.sgbm_ms.push_back(
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - s0).count());
+    }
+  }
+  mapper.Flush();
+  out.maps = mapper.Snapshot();
+  return out;
+}
+
+double Median(std::vector<double> v) {
+  if (v.empty()) return std::nan("");
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+double Percentile(std::vector<double> v, double q) {
+  if (v.empty()) return std::nan("");
+  std::sort(v.begin(), v.end());
+  return v[std::min(v.size() - 1, static_cast<size_t>(q * static_cast<double>(v.size())))];
+}
+
+// Ground truth in the world frame of the run (the robot's start pose = odometry frame):
+// T_start_gt maps the ground truth's world into it, fixed at the first key frame.
+struct Truth {
+  bool has_pose = false;
+  Eigen::Isometry2d T_start_gt = Eigen::Isometry2d::Identity();
+  Eigen::Isometry2d T_gt_start = Eigen::Isometry2d::Identity();
+  std::vector<Segment2> walls;      // start frame
+  std::vector<Segment2> furniture;  // start frame (gt_map/furniture.csv, when the dataset has it)
+};
+
+// gt_map/furniture.csv (an extension of epmap-sim): footprints of furniture, as walls.csv.
+std::vector<Segment2> ReadFurniture(const fs::path& root) {
+  std::vector<Segment2> out;
+  std::ifstream in(root / "mav0" / "gt_map" / "furniture.csv");
+  std::string line;
+  while (std::getline(in, line)) {
+    double x1, y1, x2, y2;
+    if (std::sscanf(line.c_str(), "%lf,%lf,%lf,%lf", &x1, &y1, &x2, &y2) == 4) {
+      out.push_back({{x1, y1}, {x2, y2}});
+    }
+  }
+  return out;
+}
+
+Truth MakeTruth(const Prepared& p) {
+  Truth t;
+  const auto& d = p.data;
+  if (d.gt_base_pose.empty()) return t;
+  const auto& first = p.key_frames.front();
+  const auto gt = epmap::dataset::InterpolatePlanar(d.gt_base_pose, d.frames[first.index].stamp_ns);
+  if (!gt) return t;
+  t.has_pose = true;
+  // T_gt_odom = T_gt_base(t0) * T_odom_base(t0)^-1.
+  t.T_gt_start = MakePose(gt->x, gt->y, gt->theta) * first.T_odom_base.inverse();
+  t.T_start_gt = t.T_gt_start.inverse();
+  for (const auto& w : d.walls) {
+    t.walls.push_back(
+        {t.T_start_gt * Eigen::Vector2d(w.x1, w.y1), t.T_start_gt * Eigen::Vector2d(w.x2, w.y2)});
+  }
+  for (const auto& f : ReadFurniture(d.root)) {
+    t.furniture.push_back({t.T_start_gt * f.a, t.T_start_gt * f.b});
+  }
+  return t;
+}
+
+struct PoseErrors {
+  double heading_deg = std::nan("");
+  double position_m = std::nan("");
+};
+
+PoseErrors FinalErrors(const Prepared& p, const Truth& truth, const Eigen::Isometry2d& estimate,
+                       int64_t stamp) {
+  PoseErrors e;
+  const auto gt = epmap::dataset::InterpolatePlanar(p.data.gt_base_pose, stamp);
+  if (!truth.has_pose || !gt) return e;
+  const Eigen::Isometry2d T = truth.T_start_gt * MakePose(gt->x, gt->y, gt->theta);
+  e.heading_deg = std::abs(WrapAngle(HeadingOf(estimate) - HeadingOf(T))) * kDeg;
+  e.position_m = (estimate.translation() - T.translation()).norm();
+  return e;
+}
+
+std::vector<Segment2> ToSegments(const std::vector<epmap::perceptual_map::MapSegment>& segments) {
+  std::vector<Segment2> out;
+  for (const auto& s : segments) out.push_back({s.a, s.b});
+  return out;
+}
+
+std::string Num(double v, int digits = 4) {
+  if (!std::isfinite(v)) return "null";
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", digits, v);
+  return buf;
+}
+
+void WriteText(const fs::path& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary);
+  if (!out) throw std::runtime_error("cannot write " + path.string());
+  out << text;
+}
+
+std::string PmapJson(const epmap::perceptual_map::PerceptualMap& m, const Truth& truth) {
+  std::ostringstream s;
+  s << "{\"frame\":\"world = the robot's start pose\",\"segments\":[";
+  for (size_t i = 0; i < m.segments.size(); ++i) {
+    const auto& g = m.segments[i];
+    s << (i ? "," : "") << "{\"id\":" << g.id << ",\"x1\":" << Num(g.a.x())
+      << ",\"y1\":" << Num(g.a.y()) << ",\"x2\":" << Num(g.b.x()) << ",\"y2\":" << Num(g.b.y())
+      << ",\"view\":" << g.view_id << ",\"observations\":" << g.observations << "}";
+  }
+  s << "],\"kept_ids\":[";
+  for (size_t i = 0; i < m.kept_segments.size(); ++i) s << (i ? "," : "") << m.kept_segments[i].id;
+  const auto points = [&](const std::vector<Eigen::Vector2d>& pts) {
+    s << "[";
+    for (size_t i = 0; i < pts.size(); ++i) {
+      s << (i ? "," : "") << "[" << Num(pts[i].x()) << "," << Num(pts[i].y()) << "]";
+    }
+    s << "]";
+  };
+  s << "],\"path\":";
+  points(m.path);
+  s << ",\"boundary\":";
+  points(m.boundary.outer);
+  s << ",\"inner_boundary\":";
+  points(m.boundary.inner);
+  s << ",\"views\":[";
+  for (size_t i = 0; i < m.views.size(); ++i) {
+    const auto& v = m.views[i];
+    s << (i ? "," : "") << "{\"id\":" << v.id << ",\"stamp_ns\":" << v.stamp_ns
+      << ",\"x\":" << Num(v.T_map_base.translation().x())
+      << ",\"y\":" << Num(v.T_map_base.translation().y())
+      << ",\"theta\":" << Num(HeadingOf(v.T_map_base)) << ",\"objects\":" << v.objects
+      << ",\"tracked\":" << v.tracked << ",\"in_map\":" << (v.in_map ? "true" : "false") << "}";
+  }
+  s << "]";
+  if (truth.has_pose) {
+    // Where the start pose is in the ground truth's world, to compare runs that start elsewhere.
+    s << ",\"gt_start\":[" << Num(truth.T_gt_start.translation().x(), 6) << ","
+      << Num(truth.T_gt_start.translation().y(), 6) << "," << Num(HeadingOf(truth.T_gt_start), 6)
+      << "]";
+  }
+  s << "}\n";
+  return s.str();
+}
+
+// Reads the segments (and gt_start, if any) of a pmap.json written by this command.
+struct OtherMap {
+  std::vector<Segment2> segments;
+  std::optional<Eigen::Isometry2d> T_gt_start;
+};
+
+OtherMap ReadPmap(const fs::path& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error("cannot read " + path.string());
+  std::stringstream ss;
+  ss << in.rdbuf();
+  const std::string text = ss.str();
+  OtherMap m;
+  const auto number_after = [&](const std::string& key, size_t from, size_t* end) {
+    const size_t k = text.find("\"" + key + "\":", from);
+    if (k == std::string::npos) return std::nan("");
+    const size_t b = k + key.size() + 3;
+    *end = b;
+    return std::strtod(text.c_str() + b, nullptr);
+  };
+  const size_t seg_begin = text.find("\"segments\":[");
+  const size_t seg_end = text.find("]", seg_begin);
+  if (seg_begin == std::string::npos) throw std::runtime_error(path.string() + ": no segments");
+  size_t pos = seg_begin;
+  while (true) {
+    const size_t obj = text.find("{", pos);
+    if (obj == std::string::npos || obj > seg_end) break;
+    size_t e = obj;
+    Segment2 s;
+    s.a.x() = number_after("x1", obj, &e);
+    s.a.y() = number_after("y1", obj, &e);
+    s.b.x() = number_after("x2", obj, &e);
+    s.b.y() = number_after("y2", obj, &e);
+    m.segments.push_back(s);
+    pos = text.find("}", obj) + 1;
+  }
+  const size_t g = text.find("\"gt_start\":[");
+  if (g != std::string::npos) {
+    double x = 0, y = 0, th = 0;
+    if (std::sscanf(text.c_str() + g + 12, "%lf,%lf,%lf", &x, &y, &th) == 3) {
+      m.T_gt_start = MakePose(x, y, th);
+    }
+  }
+  return m;
+}
+
+// The perceptual map over the true walls, with path and boundary (SVG, y up).
+std::string Svg(const epmap::perceptual_map::PerceptualMap& m, const Truth& truth,
+                const std::vector<Eigen::Vector2d>& true_path) {
+  Eigen::Vector2d lo(1e9, 1e9), hi(-1e9, -1e9);
+  const auto grow = [&](const Eigen::Vector2d& p) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  };
+  for (const auto& w : truth.walls) {
+    grow(w.a);
+    grow(w.b);
+  }
+  for (const auto& s : m.segments) {
+    grow(s.a);
+    grow(s.b);
+  }
+  for (const auto& p : m.path) grow(p);
+  if (!(hi.x() > lo.x())) {
+    lo = Eigen::Vector2d(-1, -1);
+    hi = Eigen::Vector2d(1, 1);
+  }
+  lo -= Eigen::Vector2d(1, 1);
+  hi += Eigen::Vector2d(1, 1);
+  const double scale = 30;  // px per metre
+  const auto X = [&](const Eigen::Vector2d& p) { return (p.x() - lo.x()) * scale; };
+  const auto Y = [&](const Eigen::Vector2d& p) { return (hi.y() - p.y()) * scale; };
+  std::ostringstream s;
+  s << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << Num((hi.x() - lo.x()) * scale, 0)
+    << "\" height=\"" << Num((hi.y() - lo.y()) * scale, 0) << "\">\n"
+    << "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n"
+    << "<text x=\"8\" y=\"16\" font-size=\"13\" font-family=\"sans-serif\">grey: true walls; "
+       "red: perceptual map (dark red: kept after redundancy removal); blue: path; green: outer "
+       "boundary; orange: inner boundary; dashed grey: true path. 1 m = 30 px</text>\n";
+  const auto line = [&](const Eigen::Vector2d& a, const Eigen::Vector2d& b, const char* colour,
+                        double width, const char* extra = "") {
+    s << "<line x1=\"" << Num(X(a), 1) << "\" y1=\"" << Num(Y(a), 1) << "\" x2=\"" << Num(X(b), 1)
+      << "\" y2=\"" << Num(Y(b), 1) << "\" stroke=\"" << colour << "\" stroke-width=\"" << width
+      << "\" " << extra << "/>\n";
+  };
+  const auto polyline = [&](const std::vector<Eigen::Vector2d>& pts, const char* colour,
+                            double width, const char* extra = "") {
+    if (pts.size() < 2) return;
+    s << "<polyline fill=\"none\" stroke=\"" << colour << "\" stroke-width=\"" << width << "\" "
+      << extra << " points=\"";
+    for (const auto& p : pts) s << Num(X(p), 1) << "," << Num(Y(p), 1) << " ";
+    s << "\"/>\n";
+  };
+  for (const auto& w : truth.walls) line(w.a, w.b, "#bbbbbb", 4);
+  polyline(true_path, "#999999", 1.5, "stroke-dasharray=\"6,4\"");
+  std::vector<bool> kept;
+  for (const auto& g : m.segments) {
+    const bool k = std::any_of(m.kept_segments.begin(), m.kept_segments.end(),
+                               [&](const auto& x) { return x.id == g.id; });
+    line(g.a, g.b, k ? "#a00000" : "#ff8080", k ? 2 : 1);
+  }
+  polyline(m.boundary.outer, "#00a000", 1.2, "stroke-opacity=\"0.8\"");
+  polyline(m.boundary.inner, "#ff9900", 1.2, "stroke-opacity=\"0.8\"");
+  polyline(m.path, "#0040ff", 2);
+  for (const auto& p : m.path) {
+    s << "<circle cx=\"" << Num(X(p), 1) << "\" cy=\"" << Num(Y(p), 1)
+      << "\" r=\"2.5\" fill=\"#0040ff\"/>\n";
+  }
+  if (!m.path.empty()) {
+    s << "<text x=\"" << Num(X(m.path.front()) + 4, 1) << "\" y=\"" << Num(Y(m.path.front()) - 4, 1)
+      << "\" font-size=\"14\" fill=\"#0040ff\">S</text>\n";
+    s << "<text x=\"" << Num(X(m.path.back()) + 4, 1) << "\" y=\"" << Num(Y(m.path.back()) - 4, 1)
+      << "\" font-size=\"14\" fill=\"#0040ff\">E</text>\n";
+  }
+  s << "</svg>\n";
+  return s.str();
+}
+
+// The same picture as the SVG, as a PNG (20 px per metre, y up).
+cv::Mat PmapPicture(const epmap::perceptual_map::PerceptualMap& m, const Truth& truth,
+                    const std::vector<Eigen::Vector2d>& true_path) {
+  Eigen::Vector2d lo(1e9, 1e9), hi(-1e9, -1e9);
+  const auto grow = [&](const Eigen::Vector2d& p) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  };
+  for (const auto& w : truth.walls) {
+    grow(w.a);
+    grow(w.b);
+  }
+  for (const auto& s : m.segments) {
+    grow(s.a);
+    grow(s.b);
+  }
+  for (const auto& p : m.path) grow(p);
+  if (!(hi.x() > lo.x())) {
+    lo = Eigen::Vector2d(-1, -1);
+    hi = Eigen::Vector2d(1, 1);
+  }
+  lo -= Eigen::Vector2d(1, 1);
+  hi += Eigen::Vector2d(1, 1);
+  const double scale = 20;
+  cv::Mat img(static_cast<int>((hi.y() - lo.y()) * scale),
+              static_cast<int>((hi.x() - lo.x()) * scale), CV_8UC3, cv::Scalar(255, 255, 255));
+  const auto px = [&](const Eigen::Vector2d& p) {
+    return cv::Point(static_cast<int>((p.x() - lo.x()) * scale),
+                     static_cast<int>((hi.y() - p.y()) * scale));
+  };
+  for (const auto& w : truth.walls) cv::line(img, px(w.a), px(w.b), cv::Scalar(190, 190, 190), 3);
+  for (const auto& f : truth.furniture) {
+    cv::line(img, px(f.a), px(f.b), cv::Scalar(150, 200, 230), 2);
+  }
+  auto solid = truth.walls;
+  solid.insert(solid.end(), truth.furniture.begin(), truth.furniture.end());
+  for (size_t i = 1; i < true_path.size(); ++i) {
+    cv::line(img, px(true_path[i - 1]), px(true_path[i]), cv::Scalar(160, 160, 160), 1);
+  }
+  for (const auto& g : m.segments) {
+    const bool kept = std::any_of(m.kept_segments.begin(), m.kept_segments.end(),
+                                  [&](const auto& x) { return x.id == g.id; });
+    // Magenta: farther than 1 m from every wall and piece of furniture (stray).
+    const bool stray =
+        !solid.empty() && epmap::mobile_mapping::CoveredShare({{g.a, g.b}}, solid, 1.0) < 0.5;
+    const cv::Scalar colour = stray  ? cv::Scalar(200, 0, 200)
+                              : kept ? cv::Scalar(0, 0, 170)
+                                     : cv::Scalar(128, 128, 255);
+    cv::line(img, px(g.a), px(g.b), colour, 1, cv::LINE_AA);
+  }
+  for (size_t i = 1; i < m.boundary.outer.size(); ++i) {
+    cv::line(img, px(m.boundary.outer[i - 1]), px(m.boundary.outer[i]), cv::Scalar(0, 160, 0), 1);
+  }
+  for (size_t i = 1; i < m.boundary.inner.size(); ++i) {
+    cv::line(img, px(m.boundary.inner[i - 1]), px(m.boundary.inner[i]), cv::Scalar(0, 150, 255), 1);
+  }
+  for (size_t i = 1; i < m.path.size(); ++i) {
+    cv::line(img, px(m.path[i - 1]), px(m.path[i]), cv::Scalar(255, 64, 0), 2);
+  }
+  return img;
+}
+
+cv::Mat GridPicture(const epmap::occupancy::GridExport& g, const Truth& truth,
+                    const std::vector<epmap::localisation::PoseRecord>& poses) {
+  const int scale = 4;
+  cv::Mat img = epmap::occupancy::RenderGrid(g, scale);
+  const auto px = [&](const Eigen::Vector2d& p) {
+    return cv::Point(
+        static_cast<int>((p.x() - g.origin_x) / g.resolution_m * scale),
+        static_cast<int>(g.height * scale - (p.y() - g.origin_y) / g.resolution_m * scale));
+  };
+  for (const auto& w : truth.walls) {
+    cv::line(img, px(w.a), px(w.b), cv::Scalar(0, 0, 230), 1, cv::LINE_AA);
+  }
+  for (size_t i = 1; i < poses.size(); ++i) {
+    cv::line(img, px(poses[i - 1].T_world_base.translation()),
+             px(poses[i].T_world_base.translation()), cv::Scalar(255, 90, 0), 1, cv::LINE_AA);
+  }
+  return img;
+}
+
+int RunCommand(int argc, char** argv) {
+  CLI::App app("Perceptual map + occupancy grid + heading correction over a mobile-base dataset",
+               argv[0]);
+  std::string dataset_path, out_dir, compare_path;
+  bool json = false, no_variants = false;
+  double floor_z = 0.0;
+  int view_min = 0;
+  size_t max_frames = 1'000'000;
+  app.add_option("--dataset", dataset_path, "dataset folder with odometry0/")->required();
+  app.add_option("--out", out_dir, "output folder (created)")->required();
+  app.add_flag("--json", json, "print the figures as one JSON object on stdout");
+  app.add_option("--compare", compare_path,
+                 "pmap.json of another run of the same world (e.g. --reverse) for the shape "
+                 "similarity");
+  app.add_option("--floor-z", floor_z, "floor height in the base frame (m)");
+  app.add_option("--view-min-key-frames", view_min,
+                 "key frames a stop needs to make a view (0 = automatic, as epmapd: 1 until the "
+                 "head pans at a stop, then 2)");
+  app.add_option("--max-key-frames", max_frames, "stop after this many key frames");
+  app.add_flag("--no-variants", no_variants,
+               "skip the runs without heading correction / without any correction");
+  CLI11_PARSE(app, argc, argv);
+  try {
+    const Prepared p = Prepare(dataset_path, max_frames);
+    fs::create_directories(out_dir);
+    const Truth truth = MakeTruth(p);
+
+    epmap::mobile_mapping::MobileMapperParams params;
+    params.floor_z_in_base_m = floor_z;
+    params.view_min_key_frames = view_min;  // 0: the mapper decides online, as in epmapd
+
+    const RunResult main = Run(p, params, true);
+    const auto& maps = *main.maps;
+    const auto& poses = maps.poses;
+    const auto grid_export = maps.grid.Export();
+
+    // Outputs.
+    WriteText(fs::path(out_dir) / "pmap.json", PmapJson(maps.perceptual, truth));
+    WriteText(fs::path(out_dir) / "grid.pgm", epmap::occupancy::EncodePgm(grid_export));
+    WriteText(fs::path(out_dir) / "grid.yaml",
+              epmap::occupancy::MapServerYaml(grid_export, "grid.pgm"));
+    {
+      std::ostringstream csv;
+      csv << "#timestamp [ns],x [m],y [m],theta [rad]\n";
+      for (const auto& r : poses) {
+        csv << r.stamp_ns << "," << Num(r.T_world_base.translation().x(), 6) << ","
+            << Num(r.T_world_base.translation().y(), 6) << "," << Num(HeadingOf(r.T_world_base), 6)
+            << "\n";
+      }
+      WriteText(fs::path(out_dir) / "poses.csv", csv.str());
+    }
+    {
+      // Per key frame: where the heading change came from, against the truth when known.
+      std::ostringstream csv;
+      csv << "#timestamp [ns],accepted,heading_source,odometry_dtheta [rad],visual_dtheta [rad],"
+             "true_dtheta [rad],edge_points,features,tracked_pairs,inliers,stop_closed,"
+             "shift_x [m],shift_y [m],x [m],y [m],theta [rad]\n";
+      size_t k = 0;
+      std::optional<double> prev_true;
+      for (size_t i = 0; i < main.reports.size(); ++i) {
+        const auto& r = main.reports[i];
+        const auto& f = p.key_frames[i];
+        const int64_t t = p.data.frames[f.index].stamp_ns;
+        std::optional<double> true_theta;
+        if (truth.has_pose) {
+          const auto gt = epmap::dataset::InterpolatePlanar(p.data.gt_base_pose, t);
+          if (gt) true_theta = gt->theta;
+        }
+        csv << t << "," << r.accepted << ",";
+        if (r.accepted && k < poses.size()) {
+          const auto& rec = poses[k++];
+          csv << epmap::localisation::ToString(rec.heading_source) << ","
+              << Num(rec.odometry_dtheta, 6) << "," << Num(rec.visual_dtheta, 6) << ",";
+        } else {
+          csv << (r.rejection ? r.rejection->reason : "") << ",,,";
+        }
+        csv << (true_theta && prev_true ? Num(WrapAngle(*true_theta - *prev_true), 6) : "") << ","
+            << r.edge_points << "," << r.features << "," << r.tracked_pairs << ","
+            << r.registration_inliers << "," << r.group_closed << "," << Num(r.shift_m.x(), 3)
+            << "," << Num(r.shift_m.y(), 3);
+        if (r.accepted && k > 0) {
+          const auto& T = poses[k - 1].T_world_base;
+          csv << "," << Num(T.translation().x(), 4) << "," << Num(T.translation().y(), 4) << ","
+              << Num(HeadingOf(T), 5);
+        }
+        csv << "\n";
+        if (true_theta) prev_true = true_theta;
+      }
+      WriteText(fs::path(out_dir) / "keyframes.csv", csv.str());
+    }
+    std::vector<Eigen::Vector2d> true_path;
+    if (truth.has_pose) {
+      for (const auto& f : p.key_frames) {
+        const auto gt =
+            epmap::dataset::InterpolatePlanar(p.data.gt_base_pose, p.data.frames[f.index].stamp_ns);
+        if (gt) true_path.push_back(truth.T_start_gt * Eigen::Vector2d(gt->x, gt->y));
+      }
+    }
+    WriteText(fs::path(out_dir) / "pmap.svg", Svg(maps.perceptual, truth, true_path));
+    cv::imwrite((fs::path(out_dir) / "grid.png").string(), GridPicture(grid_export, truth, poses));
+    if (!truth.walls.empty()) {
+      cv::imwrite((fs::path(out_dir) / "grid_errors.png").string(),
+                  epmap::mobile_mapping::GridErrorPicture(grid_export, truth.walls));
+    }
+    cv::imwrite((fs::path(out_dir) / "pmap.png").string(),
+                PmapPicture(maps.perceptual, truth, true_path));
+
+    // Figures.
+    std::ostringstream j;
+    const auto& last = poses.back();
+    const PoseErrors odo = FinalErrors(p, truth, last.T_world_base_odometry, last.stamp_ns);
+    const PoseErrors cor = FinalErrors(p, truth, last.T_world_base, last.stamp_ns);
+    const double heading_target = std::max(3.0, 0.2 * odo.heading_deg);
+    j << "{\"command\":\"maps\",\"dataset\":\"" << dataset_path
+      << "\",\"frames\":" << p.data.frames.size() << ",\"key_frames\":" << p.key_frames.size()
+      << ",\"panning_stops\":" << (p.panning_stops ? "true" : "false")
+      << ",\"camera\":{\"width\":" << p.camera.width << ",\"height\":" << p.camera.height
+      << ",\"fx\":" << Num(p.camera.fx, 3) << ",\"baseline_m\":" << Num(p.camera.baseline_m, 5)
+      << ",\"rectified_input\":" << (p.rectifier ? "false" : "true") << "}";
+    const auto& c = maps.counters;
+    j << ",\"counters\":{\"key_frames\":" << c.key_frames << ",\"rejected\":" << c.rejected
+      << ",\"stops\":" << c.groups << ",\"views\":" << c.views
+      << ",\"views_without_objects\":" << c.views_without_objects << ",\"map_expansions\":"
+      << std::count_if(maps.perceptual.views.begin(), maps.perceptual.views.end(),
+                       [](const auto& v) { return v.in_map; })
+      << ",\"visual_heading\":" << c.visual_heading
+      << ",\"odometry_heading\":" << c.odometry_heading << ",\"registrations\":" << c.registrations
+      << ",\"shifts_applied\":" << c.shifts_applied << ",\"shifts_refused\":" << c.shifts_refused
+      << ",\"rejected_by_reason\":{";
+    bool first = true;
+    for (const auto& [reason, n] : c.rejected_by_reason) {
+      j << (first ? "" : ",") << "\"" << reason << "\":" << n;
+      first = false;
+    }
+    j << "}}";
+    j << ",\"heading\":{\"odometry_final_error_deg\":" << Num(odo.heading_deg, 3)
+      << ",\"corrected_final_error_deg\":" << Num(cor.heading_deg, 3)
+      << ",\"target_deg\":" << Num(heading_target, 3) << ",\"pass\":"
+      << (std::isfinite(cor.heading_deg) ? (cor.heading_deg <= heading_target ? "true" : "false")
+                                         : "null")
+      << "},\"position\":{\"odometry_final_error_m\":" << Num(odo.position_m, 3)
+      << ",\"corrected_final_error_m\":" << Num(cor.position_m, 3) << "}";
+
+    const auto segs = ToSegments(maps.perceptual.segments);
+    const auto kept = ToSegments(maps.perceptual.kept_segments);
+    j << ",\"perceptual_map\":{\"segments\":" << segs.size() << ",\"kept_segments\":" << kept.size()
+      << ",\"segment_length_m\":" << Num(epmap::mobile_mapping::TotalLength(segs), 2);
+    if (!truth.walls.empty()) {
+      double visible_len = 0;
+      const double cov = epmap::mobile_mapping::CoveredShare(truth.walls, segs, 0.5);
+      const double cov_vis = epmap::mobile_mapping::CoveredVisibleShare(
+          truth.walls, segs, 0.5, true_path, params.edges.max_range_m, &visible_len);
+      const double stray = 1.0 - epmap::mobile_mapping::CoveredShare(segs, truth.walls, 1.0);
+      const double cov_kept = epmap::mobile_mapping::CoveredShare(truth.walls, kept, 0.5);
+      const double stray_kept = 1.0 - epmap::mobile_mapping::CoveredShare(kept, truth.walls, 1.0);
+      j << ",\"wall_length_m\":" << Num(epmap::mobile_mapping::TotalLength(truth.walls), 2)
+        << ",\"wall_coverage_0p5m\":" << Num(cov) << ",\"wall_coverage_target\":0.70"
+        << ",\"visible_wall_length_m\":" << Num(visible_len, 2)
+        << ",\"visible_wall_coverage_0p5m\":" << Num(cov_vis)
+        << ",\"stray_share_1m\":" << Num(stray) << ",\"stray_target\":0.15"
+        << ",\"kept_wall_coverage_0p5m\":" << Num(cov_kept)
+        << ",\"kept_stray_share_1m\":" << Num(stray_kept);
+      if (!truth.furniture.empty()) {
+        auto solid = truth.walls;
+        solid.insert(solid.end(), truth.furniture.begin(), truth.furniture.end());
+        j << ",\"stray_share_1m_walls_and_furniture\":"
+          << Num(1.0 - epmap::mobile_mapping::CoveredShare(segs, solid, 1.0));
+      }
+    }
+    if (!compare_path.empty()) {
+      const OtherMap other = ReadPmap(compare_path);
+      // Both maps into one frame: the ground truth's world when both know their start in it,
+      // otherwise both are taken to start at the same pose (paper 003's protocol).
+      std::vector<Segment2> a = segs, b = other.segments;
+      const bool in_gt = truth.has_pose && other.T_gt_start.has_value();
+      if (in_gt) {
+        for (auto& s : a) s = {truth.T_gt_start * s.a, truth.T_gt_start * s.b};
+        for (auto& s : b) s = {*other.T_gt_start * s.a, *other.T_gt_start * s.b};
+      }
+      const double ab = epmap::mobile_mapping::CoveredShare(a, b, 0.5);
+      const double ba = epmap::mobile_mapping::CoveredShare(b, a, 0.5);
+      j << ",\"compare\":{\"other\":\"" << compare_path << "\",\"frame\":\""
+        << (in_gt ? "ground truth world" : "shared start pose")
+        << "\",\"this_covered_by_other_0p5m\":" << Num(ab)
+        << ",\"other_covered_by_this_0p5m\":" << Num(ba)
+        << ",\"shape_similarity\":" << Num(0.5 * (ab + ba)) << "}";
+    }
+    j << "}";
+
+    const auto grid_score_against = [&](const epmap::occupancy::GridExport& g,
+                                        const std::vector<Segment2>& solid) {
+      const auto s = epmap::mobile_mapping::ScoreGrid(g, solid);
+      std::ostringstream o;
+      o << "{\"iou\":" << Num(s.iou) << ",\"iou_observed\":" << Num(s.iou_observed)
+        << ",\"occupied_cells\":" << s.occupied << ",\"wall_cells\":" << s.wall_cells
+        << ",\"wall_cells_observed\":" << s.wall_cells_observed << "}";
+      return o.str();
+    };
+    const auto grid_score = [&](const epmap::occupancy::GridExport& g) {
+      return grid_score_against(g, truth.walls);
+    };
+    j << ",\"occupancy\":{\"resolution_m\":" << Num(grid_export.resolution_m, 3)
+      << ",\"width\":" << grid_export.width << ",\"height\":" << grid_export.height
+      << ",\"layers\":" << grid_export.layer_count;
+    if (!truth.walls.empty())
+      j << ",\"corrected\":" << grid_score(grid_export) << ",\"iou_target\":0.5";
+    if (!truth.furniture.empty()) {
+      // The same against walls and the furniture footprints the dataset lists.
+      auto solid = truth.walls;
+      solid.insert(solid.end(), truth.furniture.begin(), truth.furniture.end());
+      j << ",\"corrected_walls_and_furniture\":" << grid_score_against(grid_export, solid);
+    }
+
+    std::string variants_json;
+    if (!no_variants) {
+      struct Variant {
+        const char* name;
+        bool heading, correlation, place_by_pose;
+      };
+      std::ostringstream v;
+      for (const Variant var : {Variant{"no_heading_correction", false, true, false},
+                                Variant{"odometry_only", false, false, false},
+                                Variant{"perceptual_map_placed_by_pose", true, true, true}}) {
+        auto vp = params;
+        vp.visual_heading = var.heading;
+        vp.map_correlation = var.correlation;
+        vp.perceptual.place_by_pose = var.place_by_pose;
+        const RunResult r = Run(p, vp, false);
+        const auto& rl = r.maps->poses.back();
+        const PoseErrors e = FinalErrors(p, truth, rl.T_world_base, rl.stamp_ns);
+        const auto g = r.maps->grid.Export();
+        if (!var.place_by_pose) {
+          if (!truth.walls.empty()) j << ",\"" << var.name << "\":" << grid_score(g);
+          cv::imwrite((fs::path(out_dir) / (std::string("grid_") + var.name + ".png")).string(),
+                      GridPicture(g, truth, r.maps->poses));
+        } else {
+          cv::imwrite((fs::path(out_dir) / "pmap_placed_by_pose.png").string(),
+                      PmapPicture(r.maps->perceptual, truth, true_path));
+        }
+        v << (v.tellp() > 0 ? "," : "") << "{\"name\":\"" << var.name
+          << "\",\"final_heading_error_deg\":" << Num(e.heading_deg, 3)
+          << ",\"final_position_error_m\":" << Num(e.position_m, 3);
+        if (!truth.walls.empty()) {
+          v << ",\"wall_coverage_0p5m\":"
+            << Num(epmap::mobile_mapping::CoveredShare(
+                   truth.walls, ToSegments(r.maps->perceptual.segments), 0.5))
+            << ",\"stray_share_1m\":"
+            << Num(1.0 - epmap::mobile_mapping::CoveredShare(
+                             ToSegments(r.maps->perceptual.segments), truth.walls, 1.0));
+        }
+        v << "}";
+      }
+      variants_json = v.str();
+    }
+    j << "}";
+    if (!variants_json.empty()) j << ",\"variants\":[" << variants_json << "]";
+
+    const double med = Median(main.key_frame_ms);
+    const double sg = Median(main.sgbm_ms);
+    j << ",\"timing\":{\"per_key_frame_ms_median\":" << Num(med, 2)
+      << ",\"per_key_frame_ms_p90\":" << Num(Percentile(main.key_frame_ms, 0.9), 2)
+      << ",\"per_key_frame_ms_max\":" << Num(Percentile(main.key_frame_ms, 1.0), 2)
+      << ",\"snapshot_ms_median\":" << Num(Median(main.snapshot_ms), 2)
+      << ",\"snapshot_ms_p90\":" << Num(Percentile(main.snapshot_ms, 0.9), 2)
+      << ",\"target_ms\":100,\"baseline\":\"full-frame SGBM (64 disparities, block 5) on the "
+         "same key frames\",\"baseline_sgbm_ms_median\":"
+      << Num(sg, 2) << ",\"ratio_to_baseline\":" << Num(med / sg, 3) << "}";
+    j << ",\"outputs\":\"" << out_dir << "\"}";
+    if (json) {
+      std::cout << j.str() << "\n";
+    } else {
+      std::cout << "maps: " << p.key_frames.size() << " key frames -> " << out_dir << "\n"
+                << j.str() << "\n";
+    }
+    WriteText(fs::path(out_dir) / "figures.json", j.str() + "\n");
+    return 0;
+  } catch (const std::exception& e) {
+    std::cerr << "epmap-bench maps: " << e.what() << "\n";
+    return 1;
+  }
+}
+
+}  // namespace
+
+EPMAP_BENCH_COMMAND(maps, "maps",
+                    "perceptual map + occupancy grid + corrected pose over a mobile-base dataset",
+                    RunCommand);

@@ -1,0 +1,129 @@
+// epmapctl pmap --out map.svg|map.json: the perceptual map of a mobile base (issue 6).
+// .json in the layout `epmap-bench maps` writes (metres, world frame = the robot's start
+// pose): {"segments":[{"id","x1","y1","x2","y2","view_id","observations"}],"path":[[x,y]],
+// "boundary":[[x,y]],"inner_boundary":[[x,y]],"views":[...]}; .svg a picture for people.
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <limits>
+#include <sstream>
+
+#include "clients/epmapctl/client.h"
+#include "epmap/v1/map_service.grpc.pb.h"
+
+namespace {
+
+using epmap::ctl::ClientOptions;
+
+std::string Num(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.4f", v);
+  return buf;
+}
+
+std::string Points(const google::protobuf::RepeatedPtrField<epmap::v1::Point2D>& points) {
+  std::string s = "[";
+  for (int i = 0; i < points.size(); ++i) {
+    s += (i ? ",[" : "[") + Num(points[i].x()) + "," + Num(points[i].y()) + "]";
+  }
+  return s + "]";
+}
+
+std::string Json(const epmap::v1::PerceptualMap& m) {
+  std::ostringstream s;
+  s << "{\"stamp_ns\":" << m.stamp_ns() << ",\"segments\":[";
+  for (int i = 0; i < m.segments_size(); ++i) {
+    const auto& g = m.segments(i);
+    s << (i ? "," : "") << "{\"id\":" << g.id() << ",\"x1\":" << Num(g.x1())
+      << ",\"y1\":" << Num(g.y1()) << ",\"x2\":" << Num(g.x2()) << ",\"y2\":" << Num(g.y2())
+      << ",\"view_id\":" << g.view_id() << ",\"observations\":" << g.observations() << "}";
+  }
+  s << "],\"path\":" << Points(m.path()) << ",\"boundary\":" << Points(m.boundary())
+    << ",\"inner_boundary\":" << Points(m.inner_boundary()) << ",\"views\":[";
+  for (int i = 0; i < m.views_size(); ++i) {
+    const auto& v = m.views(i);
+    s << (i ? "," : "") << "{\"id\":" << v.id() << ",\"stamp_ns\":" << v.stamp_ns()
+      << ",\"x\":" << Num(v.pose().x()) << ",\"y\":" << Num(v.pose().y())
+      << ",\"theta\":" << Num(v.pose().theta()) << ",\"segments\":" << v.segments() << "}";
+  }
+  s << "]}\n";
+  return s.str();
+}
+
+// Segments dark red, path blue, outer boundary green, inner boundary orange; y up, 50 px/m.
+std::string Svg(const epmap::v1::PerceptualMap& m) {
+  double x0 = std::numeric_limits<double>::infinity(), y0 = x0, x1 = -x0, y1 = -x0;
+  const auto grow = [&](double x, double y) {
+    x0 = std::min(x0, x);
+    y0 = std::min(y0, y);
+    x1 = std::max(x1, x);
+    y1 = std::max(y1, y);
+  };
+  for (const auto& g : m.segments()) {
+    grow(g.x1(), g.y1());
+    grow(g.x2(), g.y2());
+  }
+  for (const auto& p : m.path()) grow(p.x(), p.y());
+  if (!(x1 >= x0)) x0 = y0 = -1, x1 = y1 = 1;
+  const double scale = 50, margin = 1.0;
+  const auto X = [&](double x) { return Num((x - x0 + margin) * scale); };
+  const auto Y = [&](double y) { return Num((y1 - y + margin) * scale); };
+  std::ostringstream s;
+  s << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << Num((x1 - x0 + 2 * margin) * scale)
+    << "\" height=\"" << Num((y1 - y0 + 2 * margin) * scale) << "\">\n"
+    << "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n";
+  const auto polyline = [&](const auto& points, const char* colour) {
+    if (points.empty()) return;
+    s << "<polyline fill=\"none\" stroke=\"" << colour << "\" stroke-width=\"1.5\" points=\"";
+    for (const auto& p : points) s << X(p.x()) << "," << Y(p.y()) << " ";
+    s << "\"/>\n";
+  };
+  polyline(m.boundary(), "green");
+  polyline(m.inner_boundary(), "orange");
+  polyline(m.path(), "blue");
+  for (const auto& g : m.segments()) {
+    s << "<line x1=\"" << X(g.x1()) << "\" y1=\"" << Y(g.y1()) << "\" x2=\"" << X(g.x2())
+      << "\" y2=\"" << Y(g.y2()) << "\" stroke=\"darkred\" stroke-width=\"2\"><title>id " << g.id()
+      << "</title></line>\n";
+  }
+  s << "</svg>\n";
+  return s.str();
+}
+
+int Run(const ClientOptions& options, const std::string& out_path) {
+  const std::string ext = std::filesystem::path(out_path).extension().string();
+  if (ext != ".svg" && ext != ".json") {
+    std::cerr << "epmapctl: --out must end in .svg (picture) or .json (segments, path, boundary)\n";
+    return 2;
+  }
+  auto stub = epmap::v1::MapService::NewStub(options.Channel());
+  epmap::v1::PerceptualMap map;
+  const auto context = options.Context();
+  const grpc::Status rpc = stub->GetPerceptualMap(context.get(), {}, &map);
+  if (!rpc.ok()) return options.Fail(rpc);
+  std::ofstream out(out_path, std::ios::binary);
+  out << (ext == ".json" ? Json(map) : Svg(map));
+  if (!out.flush()) {
+    std::cerr << "epmapctl: cannot write " << out_path << "\n";
+    return 1;
+  }
+  std::printf("wrote %s: %d segments, %d views, path of %d points (stamp %lld ns)\n",
+              out_path.c_str(), map.segments_size(), map.views_size(), map.path_size(),
+              static_cast<long long>(map.stamp_ns()));
+  return 0;
+}
+
+void Setup(CLI::App& app, ClientOptions& options) {
+  auto* cmd = app.add_subcommand("pmap", "write the perceptual map (mobile-base mode) to a file");
+  auto out = std::make_shared<std::string>();
+  cmd->add_option("--out", *out, "FILE.svg (picture) or FILE.json (metres, world frame)")
+      ->required();
+  cmd->callback([&options, out] { options.exit_code = Run(options, *out); });
+}
+
+}  // namespace
+
+EPMAP_CTL_COMMAND(pmap, Setup);

@@ -1,0 +1,199 @@
+#include "perception/mobile_mapping/map_evaluation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <opencv2/imgproc.hpp>
+
+#include "perception/perceptual_map/boundary.h"
+
+namespace epmap::mobile_mapping {
+
+namespace {
+
+using perceptual_map::PointSegmentDistance;
+using perceptual_map::SegmentsIntersect;
+
+// Sample points (with the length each stands for) along a set of segments.
+struct Sample {
+  Eigen::Vector2d p;
+  double weight;
+  size_t segment;
+};
+
+std::vector<Sample> SampleSegments(const std::vector<Segment2>& segments, double step) {
+  std::vector<Sample> out;
+  for (size_t i = 0; i < segments.size(); ++i) {
+    const Eigen::Vector2d d = segments[i].b - segments[i].a;
+    const double len = d.norm();
+    if (!(len > 0) || !std::isfinite(len)) continue;
+    const int n = std::max(1, static_cast<int>(std::ceil(len / step)));
+    for (int k = 0; k < n; ++k) {
+      out.push_back({segments[i].a + d * ((k + 0.5) / n), len / n, i});
+    }
+  }
+  return out;
+}
+
+bool Near(const Eigen::Vector2d& q, const std::vector<Segment2>& segments, double tol) {
+  for (const auto& s : segments) {
+    if (PointSegmentDistance(q, s.a, s.b) <= tol) return true;
+  }
+  return false;
+}
+
+// True if segment [a, b] touches the closed box [lo, hi] (Liang-Barsky clipping).
+bool SegmentTouchesBox(const Eigen::Vector2d& a, const Eigen::Vector2d& b,
+                       const Eigen::Vector2d& lo, const Eigen::Vector2d& hi) {
+  const double eps = 1e-9;
+  double t0 = 0, t1 = 1;
+  const Eigen::Vector2d d = b - a;
+  for (int k = 0; k < 2; ++k) {
+    if (std::abs(d[k]) < 1e-15) {
+      if (a[k] < lo[k] - eps || a[k] > hi[k] + eps) return false;
+      continue;
+    }
+    double ta = (lo[k] - eps - a[k]) / d[k], tb = (hi[k] + eps - a[k]) / d[k];
+    if (ta > tb) std::swap(ta, tb);
+    t0 = std::max(t0, ta);
+    t1 = std::min(t1, tb);
+    if (t0 > t1) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+double TotalLength(const std::vector<Segment2>& segments) {
+  double sum = 0;
+  for (const auto& s : segments) sum += (s.b - s.a).norm();
+  return sum;
+}
+
+double CoveredShare(const std::vector<Segment2>& reference, const std::vector<Segment2>& candidates,
+                    double tol, double step) {
+  double total = 0, covered = 0;
+  for (const auto& s : SampleSegments(reference, step)) {
+    total += s.weight;
+    if (Near(s.p, candidates, tol)) covered += s.weight;
+  }
+  return total > 0 ? covered / total : 0.0;
+}
+
+double CoveredVisibleShare(const std::vector<Segment2>& reference,
+                           const std::vector<Segment2>& candidates, double tol,
+                           const std::vector<Eigen::Vector2d>& viewpoints, double max_range,
+                           double* visible_length, double step) {
+  // Viewpoints thinned to one per half metre: neighbours see the same walls.
+  std::vector<Eigen::Vector2d> views;
+  for (const auto& v : viewpoints) {
+    if (views.empty() || (v - views.back()).norm() >= 0.5) views.push_back(v);
+  }
+  double total = 0, covered = 0;
+  for (const auto& s : SampleSegments(reference, step)) {
+    bool visible = false;
+    for (const auto& v : views) {
+      if ((s.p - v).norm() > max_range) continue;
+      // Stop just short of the wall so the wall itself does not occlude its own point.
+      const Eigen::Vector2d q = s.p + (v - s.p).normalized() * 0.02;
+      bool blocked = false;
+      for (size_t w = 0; w < reference.size() && !blocked; ++w) {
+        if (w == s.segment) continue;
+        blocked = SegmentsIntersect(v, q, reference[w].a, reference[w].b);
+      }
+      if (!blocked) {
+        visible = true;
+        break;
+      }
+    }
+    if (!visible) continue;
+    total += s.weight;
+    if (Near(s.p, candidates, tol)) covered += s.weight;
+  }
+  if (visible_length) *visible_length = total;
+  return total > 0 ? covered / total : 0.0;
+}
+
+std::vector<uint8_t> RasteriseWalls(const occupancy::GridExport& g,
+                                    const std::vector<Segment2>& walls) {
+  const size_t n = static_cast<size_t>(g.width) * g.height;
+  // Supercover rasterisation: every cell whose closed square the wall touches (a wall along
+  // a cell boundary marks the cells on both sides, as either could hold its surface).
+  std::vector<uint8_t> wall(n, 0);
+  const double res = g.resolution_m;
+  for (const auto& w : walls) {
+    const double x0 = std::min(w.a.x(), w.b.x()), x1 = std::max(w.a.x(), w.b.x());
+    const double y0 = std::min(w.a.y(), w.b.y()), y1 = std::max(w.a.y(), w.b.y());
+    const long c0 = std::max(0L, static_cast<long>(std::floor((x0 - g.origin_x) / res)) - 1);
+    const long c1 = std::min(static_cast<long>(g.width) - 1,
+                             static_cast<long>(std::floor((x1 - g.origin_x) / res)) + 1);
+    const long r0 = std::max(0L, static_cast<long>(std::floor((y0 - g.origin_y) / res)) - 1);
+    const long r1 = std::min(static_cast<long>(g.height) - 1,
+                             static_cast<long>(std::floor((y1 - g.origin_y) / res)) + 1);
+    for (long r = r0; r <= r1; ++r) {
+      for (long c = c0; c <= c1; ++c) {
+        const Eigen::Vector2d lo(g.origin_x + c * res, g.origin_y + r * res);
+        const Eigen::Vector2d hi = lo + Eigen::Vector2d(res, res);
+        if (SegmentTouchesBox(w.a, w.b, lo, hi)) {
+          wall[static_cast<size_t>(r) * g.width + static_cast<size_t>(c)] = 1;
+        }
+      }
+    }
+  }
+  return wall;
+}
+
+GridScore ScoreGrid(const occupancy::GridExport& g, const std::vector<Segment2>& walls,
+                    uint8_t occupied_threshold) {
+  GridScore score;
+  const size_t n = static_cast<size_t>(g.width) * g.height;
+  if (n == 0 || g.occupancy.size() != n) return score;
+  const std::vector<uint8_t> wall = RasteriseWalls(g, walls);
+  size_t uni = 0, uni_obs = 0;
+  for (size_t i = 0; i < n; ++i) {
+    const bool known = g.occupancy[i] != occupancy::GridExport::kUnknown;
+    const bool occ = known && g.occupancy[i] >= occupied_threshold;
+    score.occupied += occ;
+    score.wall_cells += wall[i];
+    score.wall_cells_observed += wall[i] && known;
+    score.intersection += occ && wall[i];
+    uni += occ || wall[i];
+    uni_obs += occ || (wall[i] && known);
+  }
+  score.iou = uni ? static_cast<double>(score.intersection) / static_cast<double>(uni) : 0.0;
+  score.iou_observed =
+      uni_obs ? static_cast<double>(score.intersection) / static_cast<double>(uni_obs) : 0.0;
+  return score;
+}
+
+}  // namespace epmap::mobile_mapping
+
+namespace epmap::mobile_mapping {
+
+cv::Mat GridErrorPicture(const occupancy::GridExport& g, const std::vector<Segment2>& walls,
+                         uint8_t occupied_threshold, int scale) {
+  const size_t n = static_cast<size_t>(g.width) * g.height;
+  cv::Mat img(static_cast<int>(g.height), static_cast<int>(g.width), CV_8UC3);
+  if (n == 0 || g.occupancy.size() != n) return img;
+  const std::vector<uint8_t> wall = RasteriseWalls(g, walls);
+  for (uint32_t r = 0; r < g.height; ++r) {
+    auto* row = img.ptr<cv::Vec3b>(static_cast<int>(g.height - 1 - r));
+    for (uint32_t c = 0; c < g.width; ++c) {
+      const size_t i = static_cast<size_t>(r) * g.width + c;
+      const bool known = g.occupancy[i] != occupancy::GridExport::kUnknown;
+      const bool occ = known && g.occupancy[i] >= occupied_threshold;
+      cv::Vec3b colour = known ? cv::Vec3b(255, 255, 255) : cv::Vec3b(160, 160, 160);
+      if (occ && wall[i]) colour = cv::Vec3b(0, 170, 0);   // true positive: green
+      if (occ && !wall[i]) colour = cv::Vec3b(0, 0, 230);  // false positive: red
+      if (!occ && wall[i]) {
+        colour = known ? cv::Vec3b(230, 90, 0) : cv::Vec3b(240, 200, 150);  // missed: blue
+      }
+      row[c] = colour;
+    }
+  }
+  cv::Mat big;
+  cv::resize(img, big, cv::Size(), scale, scale, cv::INTER_NEAREST);
+  return big;
+}
+
+}  // namespace epmap::mobile_mapping

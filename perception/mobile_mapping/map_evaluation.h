@@ -1,0 +1,61 @@
+#pragma once
+// Figures that compare the maps with a ground truth (walls as 2-D segments) or with each other.
+// Used by `epmap-bench maps`; pure functions so the figures themselves are tested.
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <cstdint>
+#include <opencv2/core.hpp>
+#include <vector>
+
+#include "perception/occupancy/layered_grid.h"
+
+namespace epmap::mobile_mapping {
+
+struct Segment2 {
+  Eigen::Vector2d a = Eigen::Vector2d::Zero();
+  Eigen::Vector2d b = Eigen::Vector2d::Zero();
+};
+
+// Share of the total length of `reference` that lies within tolerance_m of some segment of
+// `candidates` (reference sampled every step_m). 0 when reference has no length.
+double CoveredShare(const std::vector<Segment2>& reference, const std::vector<Segment2>& candidates,
+                    double tolerance_m, double step_m = 0.05);
+
+// Like CoveredShare, but only over the reference points that some viewpoint could see: within
+// max_range_m and with no other reference segment in between (occluders = reference).
+// Returns the share and, in visible_length_m, the length that was visible.
+double CoveredVisibleShare(const std::vector<Segment2>& reference,
+                           const std::vector<Segment2>& candidates, double tolerance_m,
+                           const std::vector<Eigen::Vector2d>& viewpoints, double max_range_m,
+                           double* visible_length_m = nullptr, double step_m = 0.05);
+
+double TotalLength(const std::vector<Segment2>& segments);
+
+struct GridScore {
+  double iou = 0;           // occupied cells vs true wall cells, over the whole grid extent
+  double iou_observed = 0;  // the same, true wall cells counted only where the grid knows
+  size_t occupied = 0;      // cells at or above the occupied threshold
+  size_t wall_cells = 0;    // rasterised true walls inside the grid extent
+  size_t wall_cells_observed = 0;
+  size_t intersection = 0;
+};
+
+// Rasterises the walls at the grid's resolution and lattice (every cell the wall line touches)
+// and compares them with the cells
+// whose occupancy is at or above occupied_threshold (0..100; map_server's 0.65 -> 65).
+// The walls rasterised on the grid's lattice: 1 for every cell a wall line touches (a wall along
+// a cell boundary marks the cells on both sides), row-major like the grid's bytes.
+std::vector<uint8_t> RasteriseWalls(const occupancy::GridExport& grid,
+                                    const std::vector<Segment2>& walls);
+
+// A picture of ScoreGrid's comparison (y up, `scale` px per cell): green = occupied and wall,
+// red = occupied but no wall, blue = wall seen but not occupied, light blue = wall never seen,
+// white = free, grey = unknown.
+cv::Mat GridErrorPicture(const occupancy::GridExport& grid, const std::vector<Segment2>& walls,
+                         uint8_t occupied_threshold = 65, int scale = 4);
+
+GridScore ScoreGrid(const occupancy::GridExport& grid, const std::vector<Segment2>& walls,
+                    uint8_t occupied_threshold = 65);
+
+}  // namespace epmap::mobile_mapping

@@ -1,0 +1,324 @@
+#include "perception/mobile_mapping/mobile_mapper.h"
+
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace epmap::mobile_mapping {
+
+namespace {
+
+Eigen::Isometry3d To3d(const Eigen::Isometry2d& T) {
+  Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
+  out.linear().topLeftCorner<2, 2>() = T.linear();
+  out.translation().head<2>() = T.translation();
+  return out;
+}
+
+std::string Fmt(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+}  // namespace
+
+void MobileMapperParams::Validate() const {
+  edges.Validate();
+  perceptual.Validate();
+  grid.Validate();
+  measurement.Validate();
+  features.Validate();
+  registration.Validate();
+  pose.Validate();
+  if (!std::isfinite(floor_z_in_base_m)) {
+    throw std::invalid_argument("mobile mapper: floor_z_in_base_m must be finite");
+  }
+  if (!(reference_max_height_m > reference_min_height_m)) {
+    throw std::invalid_argument("mobile mapper: reference_max_height_m must exceed the minimum");
+  }
+  if (occupancy_edge_row_step < 1) {
+    throw std::invalid_argument("mobile mapper: occupancy_edge_row_step must be >= 1");
+  }
+  if (!(correlation_search_m >= 0) || !(correlation_min_gain >= 0)) {
+    throw std::invalid_argument("mobile mapper: correlation search and gain must be >= 0");
+  }
+  if (!(head_still_rad >= 0))
+    throw std::invalid_argument("mobile mapper: head_still_rad must be >= 0");
+  if (view_min_key_frames < 0) {
+    throw std::invalid_argument("mobile mapper: view_min_key_frames must be >= 0 (0 = automatic)");
+  }
+  if (!(max_odometry_step_m > 0) || !(max_odometry_step_rad > 0) || !(max_odometry_speed_mps > 0)) {
+    throw std::invalid_argument("mobile mapper: odometry limits must be > 0");
+  }
+  for (const auto& j : joint_limits) {
+    if (!(j.upper >= j.lower)) {
+      throw std::invalid_argument("mobile mapper: joint '" + j.name + "' has upper < lower");
+    }
+  }
+}
+
+MobileMapper::MobileMapper(const stereo::RectifiedGeometry& camera,
+                           const MobileMapperParams& params)
+    : camera_(camera),
+      params_(params),
+      tracker_(camera, params.features),
+      poses_(params.pose),
+      perceptual_(params.perceptual),
+      grid_(params.grid) {
+  params_.Validate();
+  perceptual_map::ValidateCamera(camera_);
+  if (camera_.width <= 0 || camera_.height <= 0) {
+    throw std::invalid_argument("mobile mapper: the camera needs its image size");
+  }
+  image_size_ = cv::Size(camera_.width, camera_.height);
+}
+
+std::optional<Rejection> MobileMapper::Check(const KeyFrame& f) const {
+  if (f.left.empty() || f.right.empty()) {
+    return Rejection{"image_missing", "key frame " + std::to_string(f.stamp_ns) +
+                                          " has an empty left or right image"};
+  }
+  if (f.left.size() != image_size_ || f.right.size() != image_size_ ||
+      f.left.type() != f.right.type()) {
+    return Rejection{"image_size", "key frame images are " + std::to_string(f.left.cols) + "x" +
+                                       std::to_string(f.left.rows) + " / " +
+                                       std::to_string(f.right.cols) + "x" +
+                                       std::to_string(f.right.rows) + ", the camera is " +
+                                       std::to_string(image_size_.width) + "x" +
+                                       std::to_string(image_size_.height)};
+  }
+  if (!f.T_odom_base.matrix().allFinite()) {
+    return Rejection{"odometry_not_finite", "the odometry pose holds NaN or infinity"};
+  }
+  const Eigen::Matrix3d R = f.T_base_cam.linear();
+  if (!f.T_base_cam.matrix().allFinite() ||
+      (R * R.transpose() - Eigen::Matrix3d::Identity()).norm() > 1e-6) {
+    return Rejection{"camera_pose_invalid",
+                     "T_base_cam is not a finite rigid transform (check the kinematic chain)"};
+  }
+  if (!f.joint_positions.empty() && !params_.joint_limits.empty()) {
+    if (f.joint_positions.size() != params_.joint_limits.size()) {
+      return Rejection{"joint_count", "key frame has " + std::to_string(f.joint_positions.size()) +
+                                          " joint readings, the limits name " +
+                                          std::to_string(params_.joint_limits.size())};
+    }
+    for (size_t i = 0; i < f.joint_positions.size(); ++i) {
+      const auto& lim = params_.joint_limits[i];
+      const double q = f.joint_positions[i];
+      if (!std::isfinite(q) || q < lim.lower - 1e-6 || q > lim.upper + 1e-6) {
+        return Rejection{"joint_out_of_range", "joint '" + lim.name + "' reads " + Fmt(q) +
+                                                   ", outside its limits [" + Fmt(lim.lower) +
+                                                   ", " + Fmt(lim.upper) + "]"};
+      }
+    }
+  }
+  if (!poses_.empty()) {
+    if (f.stamp_ns <= last_stamp_ns_) {
+      return Rejection{"stamp_not_increasing", "key frame stamp " + std::to_string(f.stamp_ns) +
+                                                   " ns is not after the previous key frame's " +
+                                                   std::to_string(last_stamp_ns_) + " ns"};
+    }
+    const Eigen::Isometry2d step = poses_.latest().T_world_base_odometry.inverse() * f.T_odom_base;
+    const double dist = step.translation().norm();
+    const double turn = std::abs(localisation::HeadingOf(step));
+    const double dt = 1e-9 * static_cast<double>(f.stamp_ns - last_stamp_ns_);
+    if (dist > params_.max_odometry_step_m || turn > params_.max_odometry_step_rad ||
+        dist / dt > params_.max_odometry_speed_mps) {
+      return Rejection{"odometry_jump", "odometry moved " + Fmt(dist) + " m and " + Fmt(turn) +
+                                            " rad in " + Fmt(dt) +
+                                            " s since the previous key frame (limits " +
+                                            Fmt(params_.max_odometry_step_m) + " m, " +
+                                            Fmt(params_.max_odometry_step_rad) + " rad, " +
+                                            Fmt(params_.max_odometry_speed_mps) + " m/s)"};
+    }
+  }
+  return std::nullopt;
+}
+
+KeyFrameReport MobileMapper::AddKeyFrame(const KeyFrame& f) {
+  KeyFrameReport report;
+  if (auto rejection = Check(f)) {
+    ++counters_.rejected;
+    ++counters_.rejected_by_reason[rejection->reason];
+    report.rejection = std::move(rejection);
+    return report;
+  }
+
+  // Measurements of this key frame (nothing in the maps changes yet). While the head stands
+  // still, its encoder noise must not become heading noise: a camera pose that differs from
+  // the previous key frame's by less than head_still_rad is taken as the same.
+  Eigen::Isometry3d T_base_cam_heading = f.T_base_cam;
+  if (previous_features_) {
+    const Eigen::AngleAxisd change(previous_features_->T_base_cam.linear().transpose() *
+                                   f.T_base_cam.linear());
+    if (std::abs(change.angle()) < params_.head_still_rad) {
+      T_base_cam_heading = previous_features_->T_base_cam;
+    }
+    // A panning stop: the head turned while the base stood (the thresholds epmap-bench maps
+    // uses to detect panning stops in a whole dataset).
+    if (!poses_.empty() && std::abs(change.angle()) > 0.05 &&
+        (poses_.latest().T_world_base_odometry.inverse() * f.T_odom_base).translation().norm() <
+            0.005) {
+      seen_panning_stop_ = true;
+    }
+  }
+  localisation::KeyFrameFeatures features = tracker_.Detect(f.left, f.right, T_base_cam_heading);
+  report.features = features.features.size();
+  const auto edges = perceptual_map::MatchEdgePoints(f.left, f.right, camera_, params_.edges);
+  report.edge_points = edges.size();
+  FramePoints frame;
+  frame.camera_in_base = f.T_base_cam.translation();
+  for (const auto& e : edges) {
+    const Eigen::Vector3d p = f.T_base_cam * e.p_cam;
+    const double h = p.z() - params_.floor_z_in_base_m;
+    if (h >= params_.reference_min_height_m && h <= params_.reference_max_height_m) {
+      frame.reference_points.emplace_back(p.x(), p.y());
+    }
+    if (static_cast<int>(e.v) % params_.occupancy_edge_row_step == 0 &&
+        e.slope <= params_.occupancy_edge_max_slope) {
+      frame.points_base.push_back(p);
+      frame.sigmas.push_back(localisation::DepthSigma(camera_, e.p_cam.z(),
+                                                      params_.features.disparity_sigma_px,
+                                                      params_.features.min_point_sigma_m));
+    }
+  }
+  for (const auto& s : features.features) {
+    frame.points_base.push_back(f.T_base_cam * s.p_cam);
+    frame.sigmas.push_back(localisation::DepthSigma(camera_, s.p_cam.z(),
+                                                    params_.features.disparity_sigma_px,
+                                                    params_.features.min_point_sigma_m));
+  }
+
+  // The stop is over when the base moves on: close it at its own pose first.
+  if (group_.open && poses_.Moved(group_.T_odom_base, f.T_odom_base)) CloseGroup(&report);
+
+  // Heading: the motion since the previous key frame from the tracked features (Sec. 3.3).
+  std::optional<double> visual_dtheta;
+  if (!poses_.empty() && params_.visual_heading && previous_features_ &&
+      poses_.Moved(poses_.latest().T_world_base_odometry, f.T_odom_base)) {
+    const Eigen::Isometry3d predicted =
+        To3d(f.T_odom_base.inverse() * poses_.latest().T_world_base_odometry);
+    const auto pairs = tracker_.Track(*previous_features_, features, predicted);
+    report.tracked_pairs = pairs.x_prev.size();
+    const auto fit =
+        params_.step_translation_from_odometry
+            ? localisation::RegisterLorentzianRotation(pairs.x_prev, pairs.x_cur, pairs.sigma,
+                                                       predicted.inverse().translation(),
+                                                       predicted.linear(), params_.registration)
+            : localisation::RegisterLorentzian(pairs.x_prev, pairs.x_cur, pairs.sigma, predicted,
+                                               params_.registration);
+    report.registration_inliers = fit.inliers;
+    // T_cur_prev rotates static points by minus the base's turn.
+    if (fit.ok) visual_dtheta = -localisation::YawOf(fit.T.linear());
+  }
+  const auto& record = poses_.Add(f.stamp_ns, f.T_odom_base, visual_dtheta);
+  report.heading_source = record.heading_source;
+  if (record.heading_source == localisation::HeadingSource::kVisual) ++counters_.visual_heading;
+  if (record.heading_source == localisation::HeadingSource::kOdometry) ++counters_.odometry_heading;
+  previous_features_ = std::move(features);
+  last_stamp_ns_ = f.stamp_ns;
+  ++counters_.key_frames;
+
+  if (!group_.open) {
+    group_.open = true;
+    group_.T_odom_base = f.T_odom_base;
+    group_.first_record = poses_.records().size() - 1;
+    group_.frames.clear();
+  }
+  group_.frames.push_back(std::move(frame));
+  report.accepted = true;
+  return report;
+}
+
+void MobileMapper::Flush() {
+  KeyFrameReport ignored;
+  if (group_.open) CloseGroup(&ignored);
+}
+
+void MobileMapper::CloseGroup(KeyFrameReport* report) {
+  group_.open = false;
+  report->group_closed = true;
+  ++counters_.groups;
+  const int min_key_frames = params_.view_min_key_frames > 0 ? params_.view_min_key_frames
+                             : seen_panning_stop_            ? 2
+                                                             : 1;
+  if (static_cast<int>(group_.frames.size()) < min_key_frames) {
+    ++counters_.groups_too_short;
+    group_.frames.clear();
+    return;
+  }
+  // The stop's pose: every key frame of the group stands there (the latest record is its last).
+  const Eigen::Isometry3d T_world_base = To3d(poses_.latest().T_world_base);
+  Eigen::Isometry3d T_floor = Eigen::Isometry3d::Identity();
+  T_floor.translation().z() = -params_.floor_z_in_base_m;  // world z = height above the floor
+  const Eigen::Isometry3d T = T_floor * T_world_base;
+
+  // Local occupancy map of the stop, in the world frame at the current pose estimate.
+  occupancy::LayeredGrid local(params_.grid);
+  for (const auto& fp : group_.frames) {
+    const Eigen::Vector3d origin = T * fp.camera_in_base;
+    for (size_t i = 0; i < fp.points_base.size(); ++i) {
+      local.AddPoint(origin, T * fp.points_base[i], fp.sigmas[i], params_.measurement);
+    }
+  }
+  int sx = 0, sy = 0;
+  if (!grid_.empty() && params_.map_correlation) {
+    const auto reg = occupancy::CorrelateMaps(local, grid_, params_.correlation_search_m);
+    ++counters_.registrations;
+    const int border =
+        static_cast<int>(std::ceil(params_.correlation_search_m / grid_.resolution()));
+    const bool on_border = std::abs(reg.dx_cells) >= border || std::abs(reg.dy_cells) >= border;
+    if (reg.local_cells >= params_.correlation_min_cells && !on_border) {
+      // Along each axis, the shift counts only if the peak is sharp there (a corridor leaves
+      // the position along it free); whole-cell moves must also clearly beat no shift.
+      const bool sharp_x = reg.sharpness_x >= params_.correlation_min_sharpness;
+      const bool sharp_y = reg.sharpness_y >= params_.correlation_min_sharpness;
+      const bool gain = reg.score > reg.zero_score * (1.0 + params_.correlation_min_gain);
+      const bool take_x = sharp_x && (reg.dx_cells == 0 || gain);
+      const bool take_y = sharp_y && (reg.dy_cells == 0 || gain);
+      const Eigen::Vector2d shift(take_x ? reg.dx_m : 0.0, take_y ? reg.dy_m : 0.0);
+      if (shift.norm() > params_.correlation_max_shift_m) {
+        ++counters_.shifts_refused;  // far more than odometry drifts between two stops
+      } else if (shift.norm() >= params_.correlation_min_shift_m) {
+        sx = take_x ? reg.dx_cells : 0;
+        sy = take_y ? reg.dy_cells : 0;
+        report->shifted = true;
+        report->shift_m = shift;
+        poses_.ApplyTranslation(shift, group_.first_record);
+        ++counters_.shifts_applied;
+      }
+    } else if (on_border) {
+      ++counters_.shifts_refused;  // the peak is at the edge of the search: no peak at all
+    }
+  }
+  grid_.MergeWeighted(local, sx, sy);
+
+  // A view of the perceptual map from every key frame of the stop.
+  std::vector<Eigen::Vector2d> points;
+  for (const auto& fp : group_.frames) {
+    points.insert(points.end(), fp.reference_points.begin(), fp.reference_points.end());
+  }
+  const auto added =
+      perceptual_.AddView(poses_.latest().stamp_ns, points, poses_.latest().T_world_base);
+  if (added.skipped) {
+    ++counters_.views_without_objects;
+    report->view_skipped = true;
+  } else {
+    ++counters_.views;
+    report->map_expanded = added.expanded;
+  }
+  group_.frames.clear();
+}
+
+std::shared_ptr<const MapsSnapshot> MobileMapper::Snapshot() const {
+  auto s = std::make_shared<MapsSnapshot>();
+  s->stamp_ns = last_stamp_ns_;
+  s->perceptual = perceptual_.Map(true);
+  s->grid = grid_;  // deep copy
+  s->poses = poses_.records();
+  s->counters = counters_;
+  return s;
+}
+
+}  // namespace epmap::mobile_mapping

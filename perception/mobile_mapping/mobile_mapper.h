@@ -1,0 +1,216 @@
+#pragma once
+// The two maps of a mobile base with a panning stereo head, fed one key frame at a time: the
+// perceptual map of paper 003 and the fuzzy layered occupancy grid of paper 002, over the pose
+// that paper 002's visual heading and map correlation correct. This is the code the service
+// runs on its pipeline thread (no threads, clocks or I/O here); readers take immutable
+// snapshots.
+//
+// Key frames at one base pose (a panning stop: the head turns, the base stays) form a group.
+// When the base moves on, the group is closed: its points make a local occupancy map,
+// registered to the global one by correlation over x and y and merged (paper 002, Sec. 2 and
+// 4), and a view of the perceptual map (paper 003, Sec. III).
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <opencv2/core.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "perception/localisation/lorentzian_registration.h"
+#include "perception/localisation/pose_corrector.h"
+#include "perception/localisation/stereo_features.h"
+#include "perception/occupancy/layered_grid.h"
+#include "perception/perceptual_map/edge_stereo.h"
+#include "perception/perceptual_map/perceptual_mapper.h"
+#include "perception/stereo/rectification.h"
+
+namespace epmap::mobile_mapping {
+
+struct JointLimit {
+  std::string name;
+  double lower = 0, upper = 0;  // rad (m for prismatic joints)
+};
+
+// One key frame as the pipeline hands it over.
+struct KeyFrame {
+  int64_t stamp_ns = 0;
+  cv::Mat left, right;  // rectified pair (the rig of MobileMapper's camera), grey or BGR
+  // Wheel odometry: the base in the odometry frame, which is the robot's start pose.
+  Eigen::Isometry2d T_odom_base = Eigen::Isometry2d::Identity();
+  // The rectified left camera on the base, from the kinematic chain at this frame's joints.
+  Eigen::Isometry3d T_base_cam = Eigen::Isometry3d::Identity();
+  // Joint readings in the order of MobileMapperParams::joint_limits (may be empty).
+  std::vector<double> joint_positions;
+};
+
+struct MobileMapperParams {
+  MobileMapperParams() {
+    // The yaw alone (one unknown) is well determined by a handful of pairs.
+    registration.vertical_axis_only = true;
+    registration.min_pairs = 4;
+  }
+
+  perceptual_map::EdgeStereoParams edges;
+  perceptual_map::PerceptualMapParams perceptual;
+  occupancy::GridParams grid;
+  occupancy::MeasurementParams measurement;
+  localisation::StereoFeatureParams features;
+  localisation::LorentzianParams registration;
+  localisation::PoseCorrectorParams pose;
+
+  double floor_z_in_base_m = 0.0;  // height of the floor in the base frame (REP 105: 0)
+  // Reference points of the perceptual map: edge points between these heights above the floor
+  // (floor texture and ceiling fixtures are not surfaces a 2-D map should hold; 6 cm keeps the
+  // top of skirting boards, the floor's own texture stays below it within the depth noise).
+  double reference_min_height_m = 0.06;
+  double reference_max_height_m = 2.0;
+  // Edge points fed to the occupancy grid: one row in this many along each vertical edge. They
+  // stand for the paper's line features cut into parts of a fixed image-plane length.
+  int occupancy_edge_row_step = 4;
+  // ... and only edges this close to vertical (|dI/dy| <= slope |dI/dx|): a slanted edge's
+  // disparity is less precise, which a 10 cm grid shows where a line map does not.
+  double occupancy_edge_max_slope = 1.0;
+
+  bool visual_heading = true;  // paper 002, Sec. 3.3; off: the odometry's heading is kept
+  // Fit only the rotation of a key-frame step, its translation taken from the odometry
+  // (RegisterLorentzianRotation; registration.vertical_axis_only then fits the yaw alone). Off:
+  // the paper's full rototranslation. See lorentzian_registration.h for why.
+  bool step_translation_from_odometry = true;
+  // A head that turned less than this between two key frames is taken as still (joint encoder
+  // noise of ~0.02 degrees would otherwise add to every visual heading step while driving).
+  double head_still_rad = 0.002;
+  bool map_correlation = true;  // paper 002, Sec. 4: translation by local/global correlation
+  double correlation_search_m = 0.5;
+  // A correlation shift is applied only when its peak beats the unshifted score by this share
+  // (a flat correlation, e.g. along a corridor, must not move the robot).
+  double correlation_min_gain = 0.05;
+  size_t correlation_min_cells = 30;  // local maps with less structure are merged unshifted
+  // The sub-cell part of the shift (parabola through the peak) is applied along an axis whose
+  // peak is at least this sharp (see occupancy::Registration): odometry drifts by centimetres
+  // between stops, less than a cell, and whole-cell shifts alone would never catch it.
+  double correlation_min_sharpness = 0.05;
+  double correlation_min_shift_m = 0.005;  // smaller corrections are noise
+  // A larger correction at one stop is refused: odometry does not drift that much between two
+  // stops, so such a peak is an alias (a repeated structure, a wall seen from its far end).
+  double correlation_max_shift_m = 0.25;
+
+  // Groups of fewer key frames are not views (2+: only panning stops make views; 1: every
+  // key frame where the base stands is a view, for a robot that never stops to pan; 0:
+  // automatic, 1 until the head has been seen panning while the base stood still, 2 from then
+  // on, which is what the service uses: it cannot know the robot's habits in advance).
+  int view_min_key_frames = 1;
+
+  // Input checks between consecutive accepted key frames.
+  double max_odometry_step_m = 2.0;  // a larger jump is refused as a glitch
+  double max_odometry_step_rad = 1.6;
+  double max_odometry_speed_mps = 3.0;
+  std::vector<JointLimit> joint_limits;  // empty: not checked
+
+  void Validate() const;
+};
+
+// Why a key frame was refused (also the counter's name).
+struct Rejection {
+  std::string reason;   // short name, e.g. "stamp_not_increasing"
+  std::string message;  // what a person can act on
+};
+
+struct KeyFrameReport {
+  bool accepted = false;
+  std::optional<Rejection> rejection;
+  localisation::HeadingSource heading_source = localisation::HeadingSource::kStart;
+  size_t edge_points = 0;
+  size_t features = 0;
+  size_t tracked_pairs = 0;
+  int registration_inliers = 0;
+  bool group_closed = false;  // this key frame closed the previous stop
+  bool view_skipped = false;  // that stop had no reference object
+  bool map_expanded = false;  // the perceptual map grew
+  bool shifted = false;       // correlation moved the pose
+  Eigen::Vector2d shift_m = Eigen::Vector2d::Zero();
+};
+
+struct MapperCounters {
+  uint64_t key_frames = 0;  // accepted
+  uint64_t rejected = 0;
+  std::map<std::string, uint64_t> rejected_by_reason;
+  uint64_t groups = 0;  // stops closed
+  uint64_t groups_too_short = 0;
+  uint64_t views = 0;  // groups that made a perceptual-map view
+  uint64_t views_without_objects = 0;
+  uint64_t visual_heading = 0;    // key frames whose heading change came from vision
+  uint64_t odometry_heading = 0;  // moved, but the visual estimate failed or was refused
+  uint64_t registrations = 0;     // local maps correlated with the global one
+  uint64_t shifts_applied = 0;
+  uint64_t shifts_refused = 0;  // peak on the search border or implausibly far
+};
+
+// What readers get: immutable once built.
+struct MapsSnapshot {
+  int64_t stamp_ns = 0;
+  perceptual_map::PerceptualMap perceptual;
+  occupancy::LayeredGrid grid;
+  std::vector<localisation::PoseRecord> poses;  // one per accepted key frame
+  MapperCounters counters;
+};
+
+class MobileMapper {
+ public:
+  // camera: the rectified rig the key frames come from. Throws std::invalid_argument on bad
+  // parameters or camera.
+  MobileMapper(const stereo::RectifiedGeometry& camera, const MobileMapperParams& params = {});
+
+  // Processes one key frame. Bad input (stamps not increasing, odometry jumping or not
+  // finite, images missing or of another size, a joint outside its limits) is refused with a
+  // reason and counted; the maps are left as they were. Never throws for bad input.
+  KeyFrameReport AddKeyFrame(const KeyFrame& frame);
+
+  // Closes the open stop (end of a run): its local map and view join the maps.
+  void Flush();
+
+  // An immutable copy of everything a reader may want.
+  std::shared_ptr<const MapsSnapshot> Snapshot() const;
+
+  const MapperCounters& counters() const { return counters_; }
+  const localisation::PoseCorrector& poses() const { return poses_; }
+  const occupancy::LayeredGrid& grid() const { return grid_; }
+  const perceptual_map::PerceptualMapper& perceptual() const { return perceptual_; }
+  const MobileMapperParams& params() const { return params_; }
+  const stereo::RectifiedGeometry& camera() const { return camera_; }
+
+ private:
+  struct FramePoints {
+    Eigen::Vector3d camera_in_base;
+    std::vector<Eigen::Vector3d> points_base;  // occupancy points (base frame)
+    std::vector<double> sigmas;
+    std::vector<Eigen::Vector2d> reference_points;  // perceptual-map points (base plane)
+  };
+  struct Group {
+    bool open = false;
+    Eigen::Isometry2d T_odom_base = Eigen::Isometry2d::Identity();
+    size_t first_record = 0;
+    std::vector<FramePoints> frames;
+  };
+
+  std::optional<Rejection> Check(const KeyFrame& frame) const;
+  void CloseGroup(KeyFrameReport* report);
+
+  stereo::RectifiedGeometry camera_;
+  MobileMapperParams params_;
+  localisation::StereoFeatureTracker tracker_;
+  localisation::PoseCorrector poses_;
+  perceptual_map::PerceptualMapper perceptual_;
+  occupancy::LayeredGrid grid_;
+  std::optional<localisation::KeyFrameFeatures> previous_features_;
+  bool seen_panning_stop_ = false;  // for view_min_key_frames = 0
+  Group group_;
+  MapperCounters counters_;
+  int64_t last_stamp_ns_ = 0;
+  cv::Size image_size_;
+};
+
+}  // namespace epmap::mobile_mapping

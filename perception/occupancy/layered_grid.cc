@@ -1,0 +1,432 @@
+#include "perception/occupancy/layered_grid.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace epmap::occupancy {
+
+void GridParams::Validate() const {
+  if (!(resolution_m > 0) || !std::isfinite(resolution_m)) {
+    throw std::invalid_argument("occupancy grid: resolution_m must be positive and finite");
+  }
+  if (layer_bounds_m.size() < 2) {
+    throw std::invalid_argument("occupancy grid: layer_bounds_m needs at least two heights");
+  }
+  for (size_t i = 1; i < layer_bounds_m.size(); ++i) {
+    if (!(layer_bounds_m[i] > layer_bounds_m[i - 1])) {
+      throw std::invalid_argument("occupancy grid: layer_bounds_m must increase strictly");
+    }
+  }
+  if (!(growth_margin_m >= 0)) {
+    throw std::invalid_argument("occupancy grid: growth_margin_m must be >= 0");
+  }
+}
+
+void MeasurementParams::Validate() const {
+  const auto unit = [](double v, const char* name) {
+    if (!(v >= 0 && v <= 1)) {
+      throw std::invalid_argument(std::string("occupancy measurement: ") + name +
+                                  " must be in [0, 1]");
+    }
+  };
+  unit(empty_evidence, "empty_evidence");
+  unit(occupied_evidence, "occupied_evidence");
+  unit(confidence_evidence, "confidence_evidence");
+  if (!(empty_gap_sigmas >= 0)) {
+    throw std::invalid_argument("occupancy measurement: empty_gap_sigmas must be >= 0");
+  }
+  if (!(max_range_m > 0)) {
+    throw std::invalid_argument("occupancy measurement: max_range_m must be > 0");
+  }
+}
+
+namespace {
+
+// Fuzzy union of a membership with new evidence (probabilistic sum).
+inline void Union(float& mu, double evidence) {
+  mu = static_cast<float>(mu + evidence - mu * evidence);
+}
+
+}  // namespace
+
+LayeredGrid::LayeredGrid(const GridParams& params) : params_(params) {
+  params_.Validate();
+  layers_.resize(static_cast<size_t>(layer_count()));
+}
+
+LayeredGrid::LayeredGrid(const LayeredGrid& other)
+    : params_(other.params_),
+      min_ix_(other.min_ix_),
+      min_iy_(other.min_iy_),
+      width_(other.width_),
+      height_(other.height_) {
+  layers_.resize(other.layers_.size());
+  for (size_t l = 0; l < layers_.size(); ++l) {
+    layers_[l].empty = other.layers_[l].empty.clone();
+    layers_[l].occupied = other.layers_[l].occupied.clone();
+    layers_[l].confidence = other.layers_[l].confidence.clone();
+  }
+}
+
+LayeredGrid& LayeredGrid::operator=(const LayeredGrid& other) {
+  if (this != &other) *this = LayeredGrid(other);
+  return *this;
+}
+
+Eigen::Vector2d LayeredGrid::origin() const {
+  return {static_cast<double>(min_ix_) * params_.resolution_m,
+          static_cast<double>(min_iy_) * params_.resolution_m};
+}
+
+int64_t LayeredGrid::CellX(double x) const {
+  return static_cast<int64_t>(std::floor(x / params_.resolution_m));
+}
+int64_t LayeredGrid::CellY(double y) const {
+  return static_cast<int64_t>(std::floor(y / params_.resolution_m));
+}
+
+int LayeredGrid::LayerOf(double h) const {
+  const auto& b = params_.layer_bounds_m;
+  if (!(h >= b.front()) || !(h < b.back())) return -1;
+  for (size_t l = 0; l + 1 < b.size(); ++l) {
+    if (h < b[l + 1]) return static_cast<int>(l);
+  }
+  return -1;
+}
+
+void LayeredGrid::CheckLayer(int layer) const {
+  if (layer < 0 || layer >= layer_count()) {
+    throw std::out_of_range("occupancy grid: layer " + std::to_string(layer) +
+                            " does not exist (the grid has layers 0.." +
+                            std::to_string(layer_count() - 1) + ")");
+  }
+}
+
+void LayeredGrid::EnsureCovers(int64_t ix_lo, int64_t iy_lo, int64_t ix_hi, int64_t iy_hi) {
+  if (width_ > 0 && ix_lo >= min_ix_ && iy_lo >= min_iy_ && ix_hi < min_ix_ + width_ &&
+      iy_hi < min_iy_ + height_) {
+    return;
+  }
+  const int64_t margin =
+      static_cast<int64_t>(std::ceil(params_.growth_margin_m / params_.resolution_m));
+  int64_t nx0 = ix_lo - margin, ny0 = iy_lo - margin;
+  int64_t nx1 = ix_hi + margin, ny1 = iy_hi + margin;
+  if (width_ > 0) {
+    nx0 = std::min(nx0, min_ix_);
+    ny0 = std::min(ny0, min_iy_);
+    nx1 = std::max(nx1, min_ix_ + width_ - 1);
+    ny1 = std::max(ny1, min_iy_ + height_ - 1);
+  }
+  const int64_t nw = nx1 - nx0 + 1, nh = ny1 - ny0 + 1;
+  if (nw > 100000 || nh > 100000 || nw * nh > 400'000'000) {
+    throw std::length_error("occupancy grid: growing to " + std::to_string(nw) + " x " +
+                            std::to_string(nh) + " cells is beyond reason (a point far away?)");
+  }
+  for (auto& layer : layers_) {
+    for (cv::Mat* m : {&layer.empty, &layer.occupied, &layer.confidence}) {
+      cv::Mat grown(static_cast<int>(nh), static_cast<int>(nw), CV_32FC1, cv::Scalar(0));
+      if (width_ > 0) {
+        m->copyTo(grown(cv::Rect(static_cast<int>(min_ix_ - nx0), static_cast<int>(min_iy_ - ny0),
+                                 width_, height_)));
+      }
+      *m = grown;
+    }
+  }
+  min_ix_ = nx0;
+  min_iy_ = ny0;
+  width_ = static_cast<int>(nw);
+  height_ = static_cast<int>(nh);
+}
+
+bool LayeredGrid::AddPoint(const Eigen::Vector3d& origin, const Eigen::Vector3d& point,
+                           double range_sigma_m, const MeasurementParams& mp) {
+  if (!origin.allFinite() || !point.allFinite() || !std::isfinite(range_sigma_m)) return false;
+  const double range = (point - origin).norm();
+  const Eigen::Vector2d o(origin.x(), origin.y());
+  const Eigen::Vector2d p(point.x(), point.y());
+  const double horizontal = (p - o).norm();
+  if (range > mp.max_range_m || horizontal < 1e-6) return false;
+  const double res = params_.resolution_m;
+  const double sigma = std::max(range_sigma_m, 1e-6);
+  const double weight = std::min(1.0, std::pow(res / sigma, mp.weight_exponent));
+  const double gap = std::max(mp.empty_gap_sigmas * sigma, res);
+
+  const int64_t ex = CellX(p.x()), ey = CellY(p.y());
+  const int64_t sx = CellX(o.x()), sy = CellY(o.y());
+  EnsureCovers(std::min(sx, ex), std::min(sy, ey), std::max(sx, ex), std::max(sy, ey));
+
+  // Amanatides-Woo traversal of the cells between the head and the point, in the plane; the
+  // height of the ray inside each cell picks the layer the empty evidence goes to.
+  const double x0 = o.x() / res, y0 = o.y() / res;
+  const double dx = (p.x() - o.x()) / res, dy = (p.y() - o.y()) / res;
+  int64_t ix = sx, iy = sy;
+  const int step_x = dx > 0 ? 1 : -1, step_y = dy > 0 ? 1 : -1;
+  const double inf = std::numeric_limits<double>::infinity();
+  const double t_delta_x = dx != 0 ? 1.0 / std::abs(dx) : inf;
+  const double t_delta_y = dy != 0 ? 1.0 / std::abs(dy) : inf;
+  double t_max_x = dx != 0 ? (static_cast<double>(ix + (step_x > 0 ? 1 : 0)) - x0) / dx : inf;
+  double t_max_y = dy != 0 ? (static_cast<double>(iy + (step_y > 0 ? 1 : 0)) - y0) / dy : inf;
+  double t_in = 0;
+  const double t_empty_end = (horizontal - gap) / horizontal;
+  const float empty_k = static_cast<float>(0.5 * mp.confidence_evidence);
+  while (!(ix == ex && iy == ey) && t_in < 1.0) {
+    const double t_out = std::min({t_max_x, t_max_y, 1.0});
+    if (t_out <= t_empty_end) {
+      const double z = origin.z() + 0.5 * (t_in + t_out) * (point.z() - origin.z());
+      const int l = LayerOf(z);
+      if (l >= 0) {
+        const int c = static_cast<int>(ix - min_ix_), r = static_cast<int>(iy - min_iy_);
+        Layer& L = layers_[static_cast<size_t>(l)];
+        Union(L.empty.at<float>(r, c), mp.empty_evidence);
+        Union(L.confidence.at<float>(r, c), empty_k);
+      }
+    } else {
+      break;  // the rest of the ray is within the point's uncertainty
+    }
+    if (t_max_x < t_max_y) {
+      ix += step_x;
+      t_max_x += t_delta_x;
+    } else {
+      iy += step_y;
+      t_max_y += t_delta_y;
+    }
+    t_in = t_out;
+  }
+  const int l = LayerOf(point.z());
+  if (l >= 0) {
+    const int c = static_cast<int>(ex - min_ix_), r = static_cast<int>(ey - min_iy_);
+    Layer& L = layers_[static_cast<size_t>(l)];
+    Union(L.occupied.at<float>(r, c), mp.occupied_evidence * weight);
+    Union(L.confidence.at<float>(r, c), mp.confidence_evidence * weight);
+  }
+  return true;
+}
+
+int LayeredGrid::AddSegment(const Eigen::Vector3d& origin, const Eigen::Vector3d& a,
+                            const Eigen::Vector3d& b, int parts, double range_sigma_m,
+                            const MeasurementParams& mp) {
+  if (parts < 1) return 0;
+  int added = 0;
+  for (int k = 0; k < parts; ++k) {
+    const double t = (k + 0.5) / parts;
+    added += AddPoint(origin, a + t * (b - a), range_sigma_m, mp) ? 1 : 0;
+  }
+  return added;
+}
+
+int PartsForImageLength(double image_length_px, double part_length_px) {
+  if (!(part_length_px > 0) || !std::isfinite(image_length_px)) return 1;
+  return std::max(1, static_cast<int>(std::lround(image_length_px / part_length_px)));
+}
+
+Cell LayeredGrid::At(int layer, int64_t ix, int64_t iy) const {
+  CheckLayer(layer);
+  if (width_ == 0 || ix < min_ix_ || iy < min_iy_ || ix >= min_ix_ + width_ ||
+      iy >= min_iy_ + height_) {
+    return {};
+  }
+  const int c = static_cast<int>(ix - min_ix_), r = static_cast<int>(iy - min_iy_);
+  const Layer& L = layers_[static_cast<size_t>(layer)];
+  return {L.empty.at<float>(r, c), L.occupied.at<float>(r, c), L.confidence.at<float>(r, c)};
+}
+
+Cell LayeredGrid::Combined(int64_t ix, int64_t iy) const {
+  Cell out;
+  float max_empty = 0;
+  for (int l = 0; l < layer_count(); ++l) {
+    const Cell c = At(l, ix, iy);
+    out.occupied = std::max(out.occupied, c.occupied);
+    max_empty = std::max(max_empty, c.empty);
+    out.confidence = std::max(out.confidence, c.confidence);
+  }
+  out.empty = std::min(max_empty, 1.0F - out.occupied);
+  return out;
+}
+
+cv::Mat LayeredGrid::SyntheticMap() const {
+  cv::Mat m(height_, width_, CV_32FC1, cv::Scalar(0));
+  for (const auto& L : layers_) {
+    if (L.occupied.empty()) continue;
+    cv::Mat o_and_k;
+    cv::min(L.occupied, L.confidence, o_and_k);  // O_l n K_l
+    cv::max(m, o_and_k, m);                      // U_l
+  }
+  return m;
+}
+
+GridExport LayeredGrid::Export(std::optional<int> layer, double unknown_below) const {
+  if (layer) CheckLayer(*layer);
+  // The cells of the layer (or the combined map), and the box around the known ones: the
+  // export is cropped to it, one unknown cell of margin around.
+  std::vector<Cell> cells(static_cast<size_t>(width_) * static_cast<size_t>(height_));
+  int c_lo = width_, c_hi = -1, r_lo = height_, r_hi = -1;
+  for (int r = 0; r < height_; ++r) {
+    for (int c = 0; c < width_; ++c) {
+      const Cell cell =
+          layer ? At(*layer, min_ix_ + c, min_iy_ + r) : Combined(min_ix_ + c, min_iy_ + r);
+      cells[static_cast<size_t>(r) * static_cast<size_t>(width_) + static_cast<size_t>(c)] = cell;
+      if (cell.confidence >= unknown_below) {
+        c_lo = std::min(c_lo, c);
+        c_hi = std::max(c_hi, c);
+        r_lo = std::min(r_lo, r);
+        r_hi = std::max(r_hi, r);
+      }
+    }
+  }
+  if (c_hi < 0) {
+    c_lo = r_lo = 0;
+    c_hi = r_hi = -1;
+  } else {
+    c_lo = std::max(0, c_lo - 1);
+    r_lo = std::max(0, r_lo - 1);
+    c_hi = std::min(width_ - 1, c_hi + 1);
+    r_hi = std::min(height_ - 1, r_hi + 1);
+  }
+  GridExport e;
+  e.resolution_m = params_.resolution_m;
+  e.origin_x = static_cast<double>(min_ix_ + c_lo) * params_.resolution_m;
+  e.origin_y = static_cast<double>(min_iy_ + r_lo) * params_.resolution_m;
+  e.width = static_cast<uint32_t>(c_hi - c_lo + 1);
+  e.height = static_cast<uint32_t>(r_hi - r_lo + 1);
+  e.layer_count = static_cast<uint32_t>(layer_count());
+  e.layer_bounds_m = params_.layer_bounds_m;
+  e.combined = !layer.has_value();
+  e.layer = layer ? static_cast<uint32_t>(*layer) : 0;
+  const size_t n = static_cast<size_t>(e.width) * e.height;
+  e.occupancy.assign(n, GridExport::kUnknown);
+  e.confidence.assign(n, 0);
+  for (uint32_t r = 0; r < e.height; ++r) {
+    for (uint32_t c = 0; c < e.width; ++c) {
+      const Cell& cell =
+          cells[static_cast<size_t>(r + static_cast<uint32_t>(r_lo)) * static_cast<size_t>(width_) +
+                c + static_cast<uint32_t>(c_lo)];
+      const size_t i = static_cast<size_t>(r) * e.width + c;
+      e.confidence[i] =
+          static_cast<uint8_t>(std::lround(255.0 * std::clamp(cell.confidence, 0.0F, 1.0F)));
+      if (cell.confidence < unknown_below) continue;
+      const double occ = std::clamp(50.0 + 50.0 * (cell.occupied - cell.empty), 0.0, 100.0);
+      e.occupancy[i] = static_cast<uint8_t>(std::lround(occ));
+    }
+  }
+  return e;
+}
+
+void LayeredGrid::MergeWeighted(const LayeredGrid& local, int shift_x, int shift_y) {
+  if (local.layer_count() != layer_count() || std::abs(local.resolution() - resolution()) > 1e-12) {
+    throw std::invalid_argument(
+        "occupancy grid: cannot merge grids of different layers or "
+        "resolution");
+  }
+  if (local.empty()) return;
+  EnsureCovers(local.min_ix_ + shift_x, local.min_iy_ + shift_y,
+               local.min_ix_ + shift_x + local.width_ - 1,
+               local.min_iy_ + shift_y + local.height_ - 1);
+  const int dc = static_cast<int>(local.min_ix_ + shift_x - min_ix_);
+  const int dr = static_cast<int>(local.min_iy_ + shift_y - min_iy_);
+  for (size_t l = 0; l < layers_.size(); ++l) {
+    const Layer& S = local.layers_[l];
+    Layer& G = layers_[l];
+    for (int r = 0; r < local.height_; ++r) {
+      const float* se = S.empty.ptr<float>(r);
+      const float* so = S.occupied.ptr<float>(r);
+      const float* sk = S.confidence.ptr<float>(r);
+      float* ge = G.empty.ptr<float>(r + dr) + dc;
+      float* go = G.occupied.ptr<float>(r + dr) + dc;
+      float* gk = G.confidence.ptr<float>(r + dr) + dc;
+      for (int c = 0; c < local.width_; ++c) {
+        const float wl = sk[c];
+        if (wl <= 0) continue;
+        const float wg = gk[c];
+        const float sum = wl + wg;
+        ge[c] = (wg * ge[c] + wl * se[c]) / sum;
+        go[c] = (wg * go[c] + wl * so[c]) / sum;
+        gk[c] = wg + wl - wg * wl;
+      }
+    }
+  }
+}
+
+Registration CorrelateMaps(const LayeredGrid& local, const LayeredGrid& global,
+                           double search_radius_m) {
+  if (std::abs(local.resolution() - global.resolution()) > 1e-12) {
+    throw std::invalid_argument("CorrelateMaps: the two grids have different resolutions");
+  }
+  if (!(search_radius_m >= 0)) {
+    throw std::invalid_argument("CorrelateMaps: search_radius_m must be >= 0");
+  }
+  Registration reg;
+  if (local.empty() || global.empty()) return reg;
+  const cv::Mat ml = local.SyntheticMap();
+  const cv::Mat mg = global.SyntheticMap();
+  struct Sample {
+    int64_t ix, iy;
+    float v;
+  };
+  std::vector<Sample> samples;
+  for (int r = 0; r < ml.rows; ++r) {
+    const float* row = ml.ptr<float>(r);
+    for (int c = 0; c < ml.cols; ++c) {
+      if (row[c] > 1e-3F) samples.push_back({local.min_ix() + c, local.min_iy() + r, row[c]});
+    }
+  }
+  reg.local_cells = samples.size();
+  const int S = static_cast<int>(std::ceil(search_radius_m / local.resolution()));
+  const int side = 2 * S + 1;
+  std::vector<double> scores(static_cast<size_t>(side * side), 0.0);
+  for (int sy = -S; sy <= S; ++sy) {
+    for (int sx = -S; sx <= S; ++sx) {
+      double score = 0;
+      for (const auto& s : samples) {
+        const int64_t c = s.ix + sx - global.min_ix();
+        const int64_t r = s.iy + sy - global.min_iy();
+        if (c < 0 || r < 0 || c >= mg.cols || r >= mg.rows) continue;
+        score += static_cast<double>(s.v) *
+                 static_cast<double>(mg.at<float>(static_cast<int>(r), static_cast<int>(c)));
+      }
+      scores[static_cast<size_t>((sy + S) * side + (sx + S))] = score;
+    }
+  }
+  const auto at = [&](int sx, int sy) {
+    return scores[static_cast<size_t>((sy + S) * side + (sx + S))];
+  };
+  reg.zero_score = at(0, 0);
+  reg.score = reg.zero_score;
+  // Ties keep the smaller shift: scan outward from zero.
+  for (int sy = -S; sy <= S; ++sy) {
+    for (int sx = -S; sx <= S; ++sx) {
+      const double v = at(sx, sy);
+      const bool smaller =
+          std::abs(sx) + std::abs(sy) < std::abs(reg.dx_cells) + std::abs(reg.dy_cells);
+      if (v > reg.score || (v == reg.score && smaller)) {
+        reg.score = v;
+        reg.dx_cells = sx;
+        reg.dy_cells = sy;
+      }
+    }
+  }
+  const auto refine = [](double lo, double mid, double hi) {
+    const double denom = lo - 2 * mid + hi;
+    return denom < 0 ? std::clamp(0.5 * (lo - hi) / denom, -0.5, 0.5) : 0.0;
+  };
+  double fx = 0, fy = 0;
+  const auto sharp = [&](double lo, double hi) {
+    return reg.score > 0 ? (2 * reg.score - lo - hi) / reg.score : 0.0;
+  };
+  if (std::abs(reg.dx_cells) < S) {
+    const double lo = at(reg.dx_cells - 1, reg.dy_cells), hi = at(reg.dx_cells + 1, reg.dy_cells);
+    fx = refine(lo, reg.score, hi);
+    reg.sharpness_x = sharp(lo, hi);
+  }
+  if (std::abs(reg.dy_cells) < S) {
+    const double lo = at(reg.dx_cells, reg.dy_cells - 1), hi = at(reg.dx_cells, reg.dy_cells + 1);
+    fy = refine(lo, reg.score, hi);
+    reg.sharpness_y = sharp(lo, hi);
+  }
+  reg.dx_m = (reg.dx_cells + fx) * local.resolution();
+  reg.dy_m = (reg.dy_cells + fy) * local.resolution();
+  return reg;
+}
+
+}  // namespace epmap::occupancy

@@ -1,0 +1,188 @@
+#include "perception/perceptual_map/boundary.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <set>
+#include <stdexcept>
+
+namespace epmap::perceptual_map {
+
+void BoundaryParams::Validate() const {
+  if (objects_per_side < 1) throw std::invalid_argument("boundary: objects_per_side must be >= 1");
+  if (!(max_distance_m > 0)) throw std::invalid_argument("boundary: max_distance_m must be > 0");
+  if (!(path_sample_m > 0)) throw std::invalid_argument("boundary: path_sample_m must be > 0");
+}
+
+namespace {
+
+double Cross(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+  return a.x() * b.y() - a.y() * b.x();
+}
+
+// The path without repeated points (stops), as lines with their arc length.
+struct PathLines {
+  std::vector<Eigen::Vector2d> points;
+  std::vector<double> arc;  // arc length at each point
+
+  explicit PathLines(const std::vector<Eigen::Vector2d>& path) {
+    for (const auto& p : path) {
+      if (!p.allFinite()) continue;
+      if (points.empty() || (p - points.back()).norm() > 1e-6) {
+        arc.push_back(points.empty() ? 0.0 : arc.back() + (p - points.back()).norm());
+        points.push_back(p);
+      }
+    }
+  }
+  size_t lines() const { return points.size() < 2 ? 0 : points.size() - 1; }
+
+  // Nearest point of the path to q: line index, arc length there, signed side (> 0 = left).
+  struct Projection {
+    size_t line = 0;
+    double arc = 0;
+    double distance = std::numeric_limits<double>::infinity();
+    double side = 0;
+  };
+  Projection Project(const Eigen::Vector2d& q) const {
+    Projection best;
+    for (size_t i = 0; i < lines(); ++i) {
+      const Eigen::Vector2d a = points[i];
+      const Eigen::Vector2d d = points[i + 1] - a;
+      const double t = std::clamp((q - a).dot(d) / d.squaredNorm(), 0.0, 1.0);
+      const double dist = (q - (a + t * d)).norm();
+      if (dist < best.distance) {
+        best.distance = dist;
+        best.line = i;
+        best.arc = arc[i] + t * d.norm();
+        best.side = Cross(d, q - a);
+      }
+    }
+    return best;
+  }
+
+  // Sum of the signed turns between successive lines: > 0 when the path turns left overall.
+  double NetTurn() const {
+    double turn = 0;
+    for (size_t i = 1; i < lines(); ++i) {
+      const Eigen::Vector2d d0 = points[i] - points[i - 1];
+      const Eigen::Vector2d d1 = points[i + 1] - points[i];
+      turn += std::atan2(Cross(d0, d1), d0.dot(d1));
+    }
+    return turn;
+  }
+};
+
+}  // namespace
+
+bool SegmentsIntersect(const Eigen::Vector2d& a1, const Eigen::Vector2d& a2,
+                       const Eigen::Vector2d& b1, const Eigen::Vector2d& b2) {
+  const auto orient = [](const Eigen::Vector2d& p, const Eigen::Vector2d& q,
+                         const Eigen::Vector2d& r) { return Cross(q - p, r - p); };
+  const auto on_segment = [](const Eigen::Vector2d& p, const Eigen::Vector2d& q,
+                             const Eigen::Vector2d& r) {
+    return std::min(p.x(), q.x()) - 1e-12 <= r.x() && r.x() <= std::max(p.x(), q.x()) + 1e-12 &&
+           std::min(p.y(), q.y()) - 1e-12 <= r.y() && r.y() <= std::max(p.y(), q.y()) + 1e-12;
+  };
+  const double d1 = orient(b1, b2, a1), d2 = orient(b1, b2, a2);
+  const double d3 = orient(a1, a2, b1), d4 = orient(a1, a2, b2);
+  if (((d1 > 0 && d2 < 0) || (d1 < 0 && d2 > 0)) && ((d3 > 0 && d4 < 0) || (d3 < 0 && d4 > 0))) {
+    return true;
+  }
+  return (d1 == 0 && on_segment(b1, b2, a1)) || (d2 == 0 && on_segment(b1, b2, a2)) ||
+         (d3 == 0 && on_segment(a1, a2, b1)) || (d4 == 0 && on_segment(a1, a2, b2));
+}
+
+double PointSegmentDistance(const Eigen::Vector2d& q, const Eigen::Vector2d& a,
+                            const Eigen::Vector2d& b) {
+  const Eigen::Vector2d d = b - a;
+  const double n = d.squaredNorm();
+  if (n <= 0) return (q - a).norm();
+  const double t = std::clamp((q - a).dot(d) / n, 0.0, 1.0);
+  return (q - (a + t * d)).norm();
+}
+
+Boundary ComputeBoundary(const std::vector<MapSegment>& segments,
+                         const std::vector<Eigen::Vector2d>& path, const BoundaryParams& params) {
+  params.Validate();
+  Boundary out;
+  const PathLines lines(path);
+
+  // 1. Objects crossing the path are not surfaces: the robot drove through them.
+  std::vector<const MapSegment*> candidates;
+  for (const auto& s : segments) {
+    bool crosses = false;
+    for (size_t i = 0; i < lines.lines() && !crosses; ++i) {
+      crosses = SegmentsIntersect(s.a, s.b, lines.points[i], lines.points[i + 1]);
+    }
+    if (crosses) {
+      out.removed_on_path.push_back(s.id);
+    } else {
+      candidates.push_back(&s);
+    }
+  }
+
+  // 2. Inner and outer: the side of the path each object lies on. Inner is the side the path
+  // turns towards overall (the inside of a loop); for a straight path, the left.
+  out.inner_is_left = lines.NetTurn() >= 0;
+  struct Placed {
+    const MapSegment* segment;
+    bool inner;
+    double arc;
+  };
+  std::vector<Placed> placed;
+  for (const MapSegment* s : candidates) {
+    const auto proj = lines.Project(s->a * 0.5 + s->b * 0.5);
+    const bool left = proj.side > 0;
+    placed.push_back({s, lines.lines() > 0 && left == out.inner_is_left, proj.arc});
+  }
+  if (lines.lines() == 0) {
+    for (const auto& p : placed) out.outer_ids.push_back(p.segment->id);
+    for (const auto& p : placed) {
+      out.outer.push_back(p.segment->a);
+      out.outer.push_back(p.segment->b);
+    }
+    return out;
+  }
+
+  // 3. For each point along the path, the nearest objects on each side are kept.
+  std::set<const MapSegment*> kept;
+  std::vector<Eigen::Vector2d> samples;
+  for (size_t i = 0; i < lines.lines(); ++i) {
+    const Eigen::Vector2d a = lines.points[i];
+    const Eigen::Vector2d d = lines.points[i + 1] - a;
+    const int n = std::max(1, static_cast<int>(std::ceil(d.norm() / params.path_sample_m)));
+    for (int k = 0; k < n; ++k) samples.push_back(a + d * (static_cast<double>(k) / n));
+  }
+  samples.push_back(lines.points.back());
+  std::vector<std::pair<double, const MapSegment*>> near[2];
+  for (const auto& q : samples) {
+    near[0].clear();
+    near[1].clear();
+    for (const auto& p : placed) {
+      const double d = PointSegmentDistance(q, p.segment->a, p.segment->b);
+      if (d <= params.max_distance_m) near[p.inner ? 1 : 0].emplace_back(d, p.segment);
+    }
+    for (auto& side : near) {
+      const size_t n = std::min(side.size(), static_cast<size_t>(params.objects_per_side));
+      std::partial_sort(side.begin(), side.begin() + static_cast<std::ptrdiff_t>(n), side.end());
+      for (size_t k = 0; k < n; ++k) kept.insert(side[k].second);
+    }
+  }
+
+  // 4. Boundary: the kept objects of each side in the order the path passes them, each one's
+  // end points in that order too, joined from one object to the next.
+  std::sort(placed.begin(), placed.end(),
+            [](const Placed& x, const Placed& y) { return x.arc < y.arc; });
+  for (const auto& p : placed) {
+    if (!kept.count(p.segment)) continue;
+    auto& ids = p.inner ? out.inner_ids : out.outer_ids;
+    auto& line = p.inner ? out.inner : out.outer;
+    ids.push_back(p.segment->id);
+    const bool a_first = lines.Project(p.segment->a).arc <= lines.Project(p.segment->b).arc;
+    line.push_back(a_first ? p.segment->a : p.segment->b);
+    line.push_back(a_first ? p.segment->b : p.segment->a);
+  }
+  return out;
+}
+
+}  // namespace epmap::perceptual_map

@@ -1,0 +1,89 @@
+#include "perception/perceptual_map/reference_objects.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <stdexcept>
+#include <utility>
+
+namespace epmap::perceptual_map {
+
+void ClusteringParams::Validate() const {
+  if (!(cell_size_m > 0)) throw std::invalid_argument("clustering: cell_size_m must be > 0");
+  if (min_points < 2) throw std::invalid_argument("clustering: min_points must be >= 2");
+  if (!(min_length_m >= 0)) throw std::invalid_argument("clustering: min_length_m must be >= 0");
+  if (!(max_rms_m > 0)) throw std::invalid_argument("clustering: max_rms_m must be > 0");
+  if (!(radial_max_angle_rad >= 0) || !(radial_min_range_m >= 0)) {
+    throw std::invalid_argument("clustering: radial filter values must be >= 0");
+  }
+}
+
+bool FitLine(const std::vector<Eigen::Vector2d>& points, ReferenceObject* out) {
+  if (points.size() < 2) return false;
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  for (const auto& p : points) mean += p;
+  mean /= static_cast<double>(points.size());
+  double sxx = 0, syy = 0, sxy = 0;
+  for (const auto& p : points) {
+    const Eigen::Vector2d d = p - mean;
+    sxx += d.x() * d.x();
+    syy += d.y() * d.y();
+    sxy += d.x() * d.y();
+  }
+  if (sxx <= 0 && syy <= 0) return false;
+  // Independent coordinate u (larger spread), dependent w = m u + b (Eq. 3-4).
+  const bool x_independent = sxx >= syy;
+  const double suu = x_independent ? sxx : syy;
+  const double m = sxy / suu;
+  const auto u_of = [&](const Eigen::Vector2d& p) { return x_independent ? p.x() : p.y(); };
+  const auto w_of = [&](const Eigen::Vector2d& p) { return x_independent ? p.y() : p.x(); };
+  const double b = w_of(mean) - m * u_of(mean);
+  double umin = u_of(points.front()), umax = umin;
+  double sq = 0;
+  for (const auto& p : points) {
+    umin = std::min(umin, u_of(p));
+    umax = std::max(umax, u_of(p));
+    const double r = (w_of(p) - (m * u_of(p) + b)) / std::sqrt(1 + m * m);
+    sq += r * r;
+  }
+  const auto point = [&](double u) {
+    const double w = m * u + b;  // Eq. 3 (first end point) and Eq. 4 (second)
+    return x_independent ? Eigen::Vector2d(u, w) : Eigen::Vector2d(w, u);
+  };
+  out->a = point(umin);
+  out->b = point(umax);
+  out->point_count = static_cast<int>(points.size());
+  out->rms_m = std::sqrt(sq / static_cast<double>(points.size()));
+  return true;
+}
+
+std::vector<ReferenceObject> FitReferenceObjects(const std::vector<Eigen::Vector2d>& points,
+                                                 const Eigen::Isometry2d& T_grid_view,
+                                                 const ClusteringParams& params) {
+  params.Validate();
+  std::map<std::pair<int64_t, int64_t>, std::vector<Eigen::Vector2d>> cells;
+  for (const auto& p : points) {
+    if (!p.allFinite()) continue;
+    const Eigen::Vector2d g = T_grid_view * p;
+    const auto key = std::make_pair(static_cast<int64_t>(std::floor(g.x() / params.cell_size_m)),
+                                    static_cast<int64_t>(std::floor(g.y() / params.cell_size_m)));
+    cells[key].push_back(p);
+  }
+  std::vector<ReferenceObject> objects;
+  for (const auto& [key, group] : cells) {
+    if (static_cast<int>(group.size()) < params.min_points) continue;
+    ReferenceObject o;
+    if (!FitLine(group, &o)) continue;
+    if (o.length() < params.min_length_m || o.rms_m > params.max_rms_m) continue;
+    const Eigen::Vector2d mid = o.mid();
+    if (params.radial_max_angle_rad > 0 && mid.norm() > params.radial_min_range_m &&
+        o.length() > 0) {
+      const double c = std::abs(mid.normalized().dot((o.b - o.a).normalized()));
+      if (c > std::cos(params.radial_max_angle_rad)) continue;  // along the line of sight
+    }
+    objects.push_back(o);
+  }
+  return objects;
+}
+
+}  // namespace epmap::perceptual_map

@@ -1,0 +1,150 @@
+// MapService's mobile-base RPCs (issue 6): the perceptual map, the occupancy grid and the pose
+// from the newest snapshot's maps (services/mapping/pipeline/pipeline_maps.cc). Errors:
+// FAILED_PRECONDITION when the service is not in mobile-base mode or no key frame has made a
+// map yet, INVALID_ARGUMENT for a layer the grid does not have.
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "services/mapping/api/map_service.h"
+#include "services/mapping/service.h"
+
+namespace epmap::mapping {
+
+namespace {
+
+void ToProto(const Eigen::Isometry2d& T, v1::Pose2D* out) {
+  out->set_x(T.translation().x());
+  out->set_y(T.translation().y());
+  out->set_theta(std::atan2(T.linear()(1, 0), T.linear()(0, 0)));
+}
+
+void ToProto(const Eigen::Vector2d& p, v1::Point2D* out) {
+  out->set_x(p.x());
+  out->set_y(p.y());
+}
+
+// The maps of the newest snapshot, or why there are none.
+grpc::Status LatestMaps(MappingService& service,
+                        std::shared_ptr<const mobile_mapping::MapsSnapshot>* maps) {
+  const std::string mode = service.pipeline().mode();
+  if (mode != "mobile-base") {
+    return {grpc::StatusCode::FAILED_PRECONDITION,
+            "the maps are built in mobile-base mode only; the service is in '" + mode +
+                "' mode (mobile-base needs odometry on " + service.config().topics.odom +
+                " or robot.mode: mobile-base)"};
+  }
+  if (!service.config().maps.enabled) {
+    return {grpc::StatusCode::FAILED_PRECONDITION, "the maps are disabled (maps.enabled: false)"};
+  }
+  const auto snapshot = service.snapshots().Latest();
+  if (!snapshot || !snapshot->maps) {
+    return {grpc::StatusCode::FAILED_PRECONDITION,
+            "no map yet: no key frame has been accepted (see GetStatus rejected_by_reason "
+            "maps:* for refused ones)"};
+  }
+  *maps = snapshot->maps;
+  return grpc::Status::OK;
+}
+
+}  // namespace
+
+grpc::Status MapServiceImpl::GetPerceptualMap(grpc::ServerContext*,
+                                              const v1::GetPerceptualMapRequest*,
+                                              v1::PerceptualMap* out) {
+  std::shared_ptr<const mobile_mapping::MapsSnapshot> maps;
+  if (auto status = LatestMaps(service_, &maps); !status.ok()) return status;
+  const auto& m = maps->perceptual;
+  out->set_stamp_ns(maps->stamp_ns);
+  for (const auto& s : m.segments) {
+    auto* seg = out->add_segments();
+    seg->set_id(s.id);
+    seg->set_x1(s.a.x());
+    seg->set_y1(s.a.y());
+    seg->set_x2(s.b.x());
+    seg->set_y2(s.b.y());
+    seg->set_view_id(s.view_id);
+    seg->set_observations(s.observations);
+  }
+  for (const auto& v : m.views) {
+    if (!v.in_map) continue;  // views that only tracked objects added nothing to the map
+    auto* view = out->add_views();
+    view->set_id(v.id);
+    view->set_stamp_ns(v.stamp_ns);
+    ToProto(v.T_map_base, view->mutable_pose());
+    view->set_segments(static_cast<uint32_t>(
+        std::count_if(m.segments.begin(), m.segments.end(),
+                      [&](const perceptual_map::MapSegment& s) { return s.view_id == v.id; })));
+  }
+  for (const auto& p : m.path) ToProto(p, out->add_path());
+  for (const auto& p : m.boundary.outer) ToProto(p, out->add_boundary());
+  for (const auto& p : m.boundary.inner) ToProto(p, out->add_inner_boundary());
+  return grpc::Status::OK;
+}
+
+grpc::Status MapServiceImpl::GetOccupancyGrid(grpc::ServerContext*,
+                                              const v1::GetOccupancyGridRequest* request,
+                                              v1::OccupancyGrid* out) {
+  std::shared_ptr<const mobile_mapping::MapsSnapshot> maps;
+  if (auto status = LatestMaps(service_, &maps); !status.ok()) return status;
+  const int layers = maps->grid.layer_count();
+  std::optional<int> layer;
+  if (request->has_layer()) {
+    if (request->layer() >= static_cast<uint32_t>(layers)) {
+      return {grpc::StatusCode::INVALID_ARGUMENT,
+              "layer " + std::to_string(request->layer()) + " does not exist: the grid has " +
+                  std::to_string(layers) + " height bands (layers 0.." +
+                  std::to_string(layers - 1) + "); omit the layer for the combined map"};
+    }
+    layer = static_cast<int>(request->layer());
+  }
+  const occupancy::GridExport g = maps->grid.Export(layer);
+  if (g.width == 0 || g.height == 0) {
+    // A stop's points join the grid when the base moves on from it; an empty map is no map.
+    return {grpc::StatusCode::FAILED_PRECONDITION,
+            std::string(layer ? "layer " + std::to_string(*layer) + " of the" : "the") +
+                " occupancy grid has no known cell yet (a stop's points join it when the base "
+                "moves on)"};
+  }
+  out->set_stamp_ns(maps->stamp_ns);
+  out->set_resolution_m(g.resolution_m);
+  out->mutable_origin()->set_x(g.origin_x);
+  out->mutable_origin()->set_y(g.origin_y);
+  out->mutable_origin()->set_theta(0.0);
+  out->set_width(g.width);
+  out->set_height(g.height);
+  out->set_layer_count(g.layer_count);
+  for (double b : g.layer_bounds_m) out->add_layer_bounds_m(b);
+  out->set_combined(g.combined);
+  out->set_layer(g.layer);
+  out->set_occupancy(g.occupancy.data(), g.occupancy.size());
+  out->set_confidence(g.confidence.data(), g.confidence.size());
+  return grpc::Status::OK;
+}
+
+grpc::Status MapServiceImpl::GetPose(grpc::ServerContext*, const v1::GetPoseRequest*,
+                                     v1::PoseEstimate* out) {
+  std::shared_ptr<const mobile_mapping::MapsSnapshot> maps;
+  if (auto status = LatestMaps(service_, &maps); !status.ok()) return status;
+  if (maps->poses.empty()) {
+    return {grpc::StatusCode::FAILED_PRECONDITION, "no pose yet: no key frame accepted"};
+  }
+  const auto& r = maps->poses.back();
+  out->set_stamp_ns(r.stamp_ns);
+  ToProto(r.T_world_base_odometry, out->mutable_odometry());
+  ToProto(r.T_world_base, out->mutable_corrected());
+  // corrected - odometry, component-wise in the world frame, the angle wrapped to (-pi, pi].
+  const auto& o = out->odometry();
+  const auto& c = out->corrected();
+  double dtheta = std::remainder(c.theta() - o.theta(), 2.0 * std::numbers::pi);
+  if (dtheta <= -std::numbers::pi) dtheta += 2.0 * std::numbers::pi;
+  out->mutable_difference()->set_x(c.x() - o.x());
+  out->mutable_difference()->set_y(c.y() - o.y());
+  out->mutable_difference()->set_theta(dtheta);
+  out->set_keyframes(static_cast<uint32_t>(maps->counters.key_frames));
+  out->set_registrations(static_cast<uint32_t>(maps->counters.registrations));
+  return grpc::Status::OK;
+}
+
+}  // namespace epmap::mapping

@@ -1,0 +1,131 @@
+// The pipeline's maps stage (mobile-base mode; issue 6, perception/mobile_mapping): each frame's
+// rectified pair, the rt/odom pose interpolated to its stamp and the head's joints (the pan)
+// from rt/joint_states go to the same MobileMapper `epmap-bench maps` runs; key frames update
+// the perceptual map, the occupancy grid and the corrected pose, which the snapshot carries to
+// GetPerceptualMap, GetOccupancyGrid and GetPose.
+
+#include <spdlog/spdlog.h>
+
+#include <cmath>
+
+#include "services/mapping/pipeline/pipeline.h"
+
+namespace epmap::mapping {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+bool SameGeometry(const stereo::RectifiedGeometry& a, const stereo::RectifiedGeometry& b) {
+  return a.width == b.width && a.height == b.height && a.fx == b.fx && a.fy == b.fy &&
+         a.cx == b.cx && a.cy == b.cy && a.baseline_m == b.baseline_m;
+}
+
+// The rectified left camera in the raw one: x_rect = R x_raw, so it sits at [R^T | 0].
+Eigen::Isometry3d RawToRectified(const stereo::Rectifier& rectifier) {
+  Eigen::Isometry3d T_raw_rect = Eigen::Isometry3d::Identity();
+  const cv::Matx33d& R = rectifier.left_rotation();
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) T_raw_rect.linear()(r, c) = R(c, r);
+  }
+  return T_raw_rect;
+}
+
+mobile_mapping::MobileMapperParams MakeMapperParams(
+    const MapsSettings& s, const std::vector<mobile_mapping::JointLimit>& limits) {
+  mobile_mapping::MobileMapperParams p;
+  p.visual_heading = s.visual_heading;
+  p.map_correlation = s.map_correlation;
+  p.view_min_key_frames = s.view_min_key_frames;
+  p.max_odometry_step_m = s.max_odometry_step_m;
+  p.max_odometry_step_rad = s.max_odometry_step_rad;
+  p.max_odometry_speed_mps = s.max_odometry_speed_mps;
+  p.joint_limits = limits;
+  return p;
+}
+
+}  // namespace
+
+void Pipeline::RunMaps(const StereoFrame& frame, const stereo::Rectifier& rectifier,
+                       const cv::Mat& left, const cv::Mat& right, MapSnapshot& snapshot) {
+  snapshot.maps = maps_;  // unchanged until a key frame is accepted
+  if (!chain_) {
+    // Without the chain from the base to the camera the points cannot be placed on the floor.
+    counters_.rejected.Increment("maps:no_urdf");
+    return;
+  }
+  const auto wait = std::chrono::nanoseconds(config_.joints_wait_ns);
+  std::string reason;
+  std::vector<double> joints;
+  if (!chain_->joint_names().empty()) {
+    auto q = sensors_.JointsAt(frame.stamp_ns, chain_->joint_names(), config_.joints_max_gap_ns,
+                               wait, &reason);
+    if (!q) {
+      counters_.rejected.Increment("maps:no_joints");
+      return;
+    }
+    joints = std::move(*q);
+  }
+  const auto odom = sensors_.OdometryAt(frame.stamp_ns, config_.joints_max_gap_ns, wait, &reason);
+  if (!odom) {
+    counters_.rejected.Increment("maps:no_odometry");
+    return;
+  }
+
+  mobile_mapping::KeyFrame key_frame;
+  key_frame.stamp_ns = frame.stamp_ns;
+  key_frame.left = left;
+  key_frame.right = right;
+  key_frame.T_odom_base = Eigen::Translation2d(odom->x, odom->y) * Eigen::Rotation2Dd(odom->theta);
+  key_frame.T_base_cam = chain_->Cam0Pose(joints) * RawToRectified(rectifier);
+  key_frame.joint_positions = joints;
+  if (!std::isfinite(odom->x) || !std::isfinite(odom->y) || !std::isfinite(odom->theta)) {
+    counters_.rejected.Increment("maps:odometry_not_finite");
+    return;
+  }
+
+  if (!key_frames_) {
+    mobile_mapping::KeyFrameSelectorParams kp;
+    kp.min_translation_m = config_.maps.key_frame_min_translation_m;
+    kp.min_rotation_rad = config_.maps.key_frame_min_rotation_rad;
+    kp.min_camera_rotation_rad = config_.maps.key_frame_min_pan_rad;
+    key_frames_.emplace(kp);
+  }
+  if (!key_frames_->Consider(key_frame.T_odom_base, key_frame.T_base_cam)) return;
+
+  if (!mapper_ || !SameGeometry(mapper_->camera(), rectifier.geometry())) {
+    // A new rectification (another camera, a new stereo model) makes the old maps' points
+    // incomparable with the new ones: the maps restart, counted.
+    if (mapper_) events_.Increment("maps_restarted_new_rectification");
+    mapper_ = std::make_unique<mobile_mapping::MobileMapper>(
+        rectifier.geometry(), MakeMapperParams(config_.maps, joint_limits_));
+  }
+
+  const auto t0 = Clock::now();
+  mobile_mapping::KeyFrameReport report;
+  try {
+    report = mapper_->AddKeyFrame(key_frame);
+  } catch (const std::exception& e) {
+    // An algorithm failure on one key frame must not end the maps: counted, frame skipped.
+    counters_.rejected.Increment("maps:exception");
+    spdlog::warn("maps: key frame {} failed: {}", frame.stamp_ns, e.what());
+    return;
+  }
+  if (!report.accepted) {
+    const auto& r = report.rejection;
+    counters_.rejected.Increment("maps:" + (r ? r->reason : std::string("refused")));
+    spdlog::warn("maps: key frame {} refused: {}", frame.stamp_ns,
+                 r ? r->message : std::string("no reason given"));
+    return;
+  }
+  events_.Increment("maps_key_frames");
+  if (report.edge_points == 0) events_.Increment("maps_key_frame_without_edges");
+  if (report.view_skipped) events_.Increment("maps_view_without_objects");
+  if (report.shifted) events_.Increment("maps_correlation_shifts");
+  maps_ = mapper_->Snapshot();
+  snapshot.maps = maps_;
+  stage_ms_.Add("maps.key_frame",
+                std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+}
+
+}  // namespace epmap::mapping

@@ -1,0 +1,382 @@
+// Mobile-base maps end to end (issue 6): a short run through the synthetic building is
+// recorded (for its ground truth and URDF) and published over DDS by epmap-sim to a real
+// epmapd on this test's own domain; epmapctl, run as a process, writes the perceptual map
+// (JSON, SVG), the occupancy grid (PGM + map_server YAML, PNG) and the pose, which are checked
+// against the ground truth. A layer that does not exist is INVALID_ARGUMENT; before any
+// odometry the maps are FAILED_PRECONDITION.
+
+#include <epmap_dds/CameraInfoPubSubTypes.h>
+#include <epmap_dds/ImagePubSubTypes.h>
+#include <epmap_dds/JointStatePubSubTypes.h>
+#include <epmap_dds/OdometryPubSubTypes.h>
+#include <gtest/gtest.h>
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <fstream>
+#include <numbers>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <sstream>
+#include <thread>
+
+#include "common/dataset/dataset.h"
+#include "common/dds/endpoints.h"
+#include "common/dds/participant.h"
+#include "common/dds/ros_conversions.h"
+#include "common/dds/topics.h"
+#include "perception/mobile_mapping/map_evaluation.h"
+#include "tests/support/epmapd_fixture.h"
+
+namespace epmap {
+namespace {
+
+using mobile_mapping::Segment2;
+
+constexpr int kFrames = 150;  // ~15 s at the scenario's 10 Hz: out of the start room, ~5 m
+
+std::string ReadText(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+Eigen::Isometry2d Pose(double x, double y, double theta) {
+  return Eigen::Translation2d(x, y) * Eigen::Rotation2Dd(theta);
+}
+
+std::pair<int, std::string> Ctl(const testing::Epmapd& epmapd, const std::filesystem::path& work,
+                                std::vector<std::string> args) {
+  args.insert(args.begin(), {"--server", epmapd.address()});
+  return testing::RunToCompletion(testing::BinDir() / "epmapctl", args, work / "ctl.log",
+                                  std::chrono::seconds(30));
+}
+
+TEST(MapsE2E, BuildingRunGivesMapsNearTheTrueWalls) {
+  const auto work = testing::FreshTempDir("maps-e2e");
+  const uint32_t domain = testing::UniqueDomainId(61);
+
+  // The same run (same seed) recorded: its URDF for epmapd, its ground truth for the checks.
+  const auto rec = work / "rec";
+  const auto [rec_code, rec_out] =
+      testing::RunToCompletion(testing::BinDir() / "epmap-sim",
+                               {"record", "--scenario", "building", "--frames",
+                                std::to_string(kFrames), "--out", rec.string()},
+                               work / "record.log", std::chrono::seconds(60));
+  ASSERT_EQ(rec_code, 0) << rec_out;
+  const auto data = dataset::Load(rec);
+  ASSERT_TRUE(data.urdf.has_value());
+  ASSERT_FALSE(data.walls.empty());
+  ASSERT_FALSE(data.odometry.empty());
+
+  testing::Epmapd epmapd(domain, {"--urdf", data.urdf->string()}, work);
+  ASSERT_TRUE(epmapd.WaitReady()) << epmapd.process().Output();
+
+  // No odometry yet: not a mobile base, so no maps (a clear precondition, not a crash).
+  {
+    const auto [code, out] = Ctl(epmapd, work, {"pose"});
+    EXPECT_NE(code, 0);
+    EXPECT_NE(out.find("FAILED_PRECONDITION"), std::string::npos) << out;
+  }
+
+  const auto [pub_code, pub_out] =
+      testing::RunToCompletion(testing::BinDir() / "epmap-sim",
+                               {"publish", "--scenario", "building", "--frames",
+                                std::to_string(kFrames), "--domain", std::to_string(domain)},
+                               work / "publish.log", std::chrono::seconds(90));
+  ASSERT_EQ(pub_code, 0) << pub_out;
+  // Until the queue has drained and the pipeline is idle.
+  uint64_t last = ~0ull;
+  const auto status = epmapd.WaitStatus(
+      [&](const v1::ServiceStatus& s) {
+        const bool idle = s.queue_depth() == 0 && s.frames_processed() == last;
+        last = s.frames_processed();
+        return idle;
+      },
+      std::chrono::seconds(30));
+  EXPECT_EQ(status.mode(), "mobile-base");
+  const uint64_t key_frames = testing::Epmapd::Count(status.events(), "maps_key_frames");
+  EXPECT_GE(key_frames, 10u) << status.DebugString();
+  for (const auto& c : status.rejected_by_reason()) {
+    // Good input: no key frame refused by the maps.
+    EXPECT_NE(c.reason().rfind("maps:", 0), 0u) << c.reason() << " " << c.count();
+  }
+
+  // Ground truth in the world frame of the maps (the start pose = the odometry frame).
+  const auto gt0 = dataset::InterpolatePlanar(data.gt_base_pose, data.odometry.front().stamp_ns);
+  ASSERT_TRUE(gt0.has_value());
+  const auto& o0 = data.odometry.front();
+  const Eigen::Isometry2d T_start_gt =
+      (Pose(gt0->x, gt0->y, gt0->theta) * Pose(o0.x, o0.y, o0.theta).inverse()).inverse();
+  std::vector<Segment2> walls;
+  for (const auto& w : data.walls) {
+    walls.push_back(
+        {T_start_gt * Eigen::Vector2d(w.x1, w.y1), T_start_gt * Eigen::Vector2d(w.x2, w.y2)});
+  }
+
+  // Perceptual map: segments in the world frame, most of their length near true walls (the
+  // rest is furniture and door frames).
+  {
+    const auto [code, out] = Ctl(epmapd, work, {"pmap", "--out", (work / "map.json").string()});
+    ASSERT_EQ(code, 0) << out << epmapd.process().Output();
+    const YAML::Node map = YAML::Load(ReadText(work / "map.json"));
+    std::vector<Segment2> segments;
+    for (const auto& s : map["segments"]) {
+      segments.push_back({{s["x1"].as<double>(), s["y1"].as<double>()},
+                          {s["x2"].as<double>(), s["y2"].as<double>()}});
+    }
+    ASSERT_GE(segments.size(), 5u);
+    EXPECT_GE(map["path"].size(), 2u);
+    const double near_walls = mobile_mapping::CoveredShare(segments, walls, 1.0);
+    std::printf("perceptual map: %zu segments, %.0f%% of their length within 1 m of a wall\n",
+                segments.size(), 100 * near_walls);
+    EXPECT_GE(near_walls, 0.6);
+    const auto [svg_code, svg_out] =
+        Ctl(epmapd, work, {"pmap", "--out", (work / "map.svg").string()});
+    ASSERT_EQ(svg_code, 0) << svg_out;
+    EXPECT_NE(ReadText(work / "map.svg").find("<svg"), std::string::npos);
+  }
+
+  // Occupancy grid: PGM + YAML as map_server loads them; occupied cells near true walls.
+  {
+    const auto pgm = work / "grid.pgm";
+    const auto [code, out] = Ctl(epmapd, work, {"grid", "--out", pgm.string()});
+    ASSERT_EQ(code, 0) << out;
+    const YAML::Node yaml = YAML::LoadFile((work / "grid.yaml").string());
+    EXPECT_EQ(yaml["image"].as<std::string>(), "grid.pgm");
+    const double resolution = yaml["resolution"].as<double>();
+    EXPECT_GT(resolution, 0.0);
+    ASSERT_EQ(yaml["origin"].size(), 3u);
+    EXPECT_EQ(yaml["negate"].as<int>(), 0);
+    const double occupied_thresh = yaml["occupied_thresh"].as<double>();
+    EXPECT_GT(occupied_thresh, yaml["free_thresh"].as<double>());
+    const cv::Mat image = cv::imread(pgm.string(), cv::IMREAD_UNCHANGED);
+    ASSERT_FALSE(image.empty());
+    ASSERT_EQ(image.type(), CV_8UC1);
+    // map_server: p = (255 - value) / 255 with negate 0; the image's top row is the largest y.
+    const double ox = yaml["origin"][0].as<double>(), oy = yaml["origin"][1].as<double>();
+    std::vector<Segment2> occupied;
+    for (int r = 0; r < image.rows; ++r) {
+      for (int c = 0; c < image.cols; ++c) {
+        if ((255.0 - image.at<uint8_t>(r, c)) / 255.0 <= occupied_thresh) continue;
+        const Eigen::Vector2d centre(ox + (c + 0.5) * resolution,
+                                     oy + (image.rows - r - 0.5) * resolution);
+        occupied.push_back({centre, centre});
+      }
+    }
+    ASSERT_GE(occupied.size(), 20u);
+    size_t near = 0;
+    for (const auto& cell : occupied) {
+      near += mobile_mapping::CoveredShare({{cell.a, cell.a + Eigen::Vector2d(1e-3, 0)}}, walls,
+                                           0.3) > 0.5;
+    }
+    const double share = static_cast<double>(near) / occupied.size();
+    std::printf("grid: %dx%d cells of %.2f m, %zu occupied, %.0f%% within 0.3 m of a wall\n",
+                image.cols, image.rows, resolution, occupied.size(), 100 * share);
+    EXPECT_GE(share, 0.5);
+
+    const auto [png_code, png_out] =
+        Ctl(epmapd, work, {"grid", "--out", (work / "grid.png").string(), "--layer", "0"});
+    EXPECT_EQ(png_code, 0) << png_out;
+    EXPECT_FALSE(cv::imread((work / "grid.png").string()).empty());
+    const auto [bad_code, bad_out] =
+        Ctl(epmapd, work, {"grid", "--out", (work / "bad.pgm").string(), "--layer", "99"});
+    EXPECT_NE(bad_code, 0);
+    EXPECT_NE(bad_out.find("INVALID_ARGUMENT"), std::string::npos) << bad_out;
+    EXPECT_NE(bad_out.find("layer 99"), std::string::npos) << bad_out;
+  }
+
+  // Pose: the corrected pose near the truth at the same odometry reading, difference finite.
+  {
+    const auto [code, out] = Ctl(epmapd, work, {"pose", "--json"});
+    ASSERT_EQ(code, 0) << out;
+    const YAML::Node pose = YAML::Load(out);
+    const auto odo = pose["odometry"], cor = pose["corrected"], diff = pose["difference"];
+    for (const auto* k : {"x", "y", "theta"}) {
+      EXPECT_TRUE(std::isfinite(diff[k].as<double>())) << out;
+    }
+    EXPECT_LT(std::abs(diff["theta"].as<double>()), 0.1) << out;
+    EXPECT_GE(pose["keyframes"].as<uint64_t>(), key_frames > 0 ? 1u : 0u);
+    // Publish and record share the seed: the recorded frame with this odometry reading is the
+    // moment of the served pose (their stamps differ: publish uses the wall clock).
+    const Eigen::Vector2d served_odo(odo["x"].as<double>(), odo["y"].as<double>());
+    size_t best = 0;
+    for (size_t i = 0; i < data.odometry.size(); ++i) {
+      const auto& o = data.odometry[i];
+      if ((Eigen::Vector2d(o.x, o.y) - served_odo).norm() <
+          (Eigen::Vector2d(data.odometry[best].x, data.odometry[best].y) - served_odo).norm()) {
+        best = i;
+      }
+    }
+    const auto gt = dataset::InterpolatePlanar(data.gt_base_pose, data.odometry[best].stamp_ns);
+    ASSERT_TRUE(gt.has_value());
+    const Eigen::Isometry2d truth = T_start_gt * Pose(gt->x, gt->y, gt->theta);
+    const Eigen::Vector2d corrected(cor["x"].as<double>(), cor["y"].as<double>());
+    const double position_error = (corrected - truth.translation()).norm();
+    const double heading_error = std::abs(std::remainder(
+        cor["theta"].as<double>() - std::atan2(truth.linear()(1, 0), truth.linear()(0, 0)),
+        2 * std::numbers::pi));
+    std::printf("pose: corrected %.3f m and %.2f deg from the truth\n", position_error,
+                heading_error * 180 / std::numbers::pi);
+    EXPECT_LT(position_error, 0.3) << out;
+    EXPECT_LT(heading_error, 2.0 * std::numbers::pi / 180) << out;
+  }
+}
+
+// A hand-made robot on DDS: a textured plane 1 m ahead, odometry and the pan joint at every
+// image stamp, so that single samples can be made bad.
+class MobileBasePublisher {
+ public:
+  explicit MobileBasePublisher(uint32_t domain)
+      : participant_(domain, "maps-bad-input-test"),
+        left_(participant_, dds::TopicNames().left_image),
+        right_(participant_, dds::TopicNames().right_image),
+        left_info_(participant_, dds::TopicNames().left_info),
+        right_info_(participant_, dds::TopicNames().right_info),
+        joints_(participant_, dds::TopicNames().joints),
+        odom_(participant_, dds::TopicNames().odom) {}
+
+  bool WaitMatched() {
+    const auto t = std::chrono::seconds(15);
+    const bool ok = left_.WaitForReaders(1, t) && right_.WaitForReaders(1, t) &&
+                    left_info_.WaitForReaders(1, t) && right_info_.WaitForReaders(1, t) &&
+                    joints_.WaitForReaders(1, t) && odom_.WaitForReaders(1, t);
+    std::this_thread::sleep_for(std::chrono::milliseconds(500));
+    return ok;
+  }
+
+  void Odometry(int64_t stamp, double x) {
+    nav_msgs::msg::Odometry msg;
+    dds::ToOdometry({stamp, x, 0.0, 0.0}, "odom", "base_link", &msg);
+    odom_.Write(msg);
+    Pace();
+  }
+
+  // One frame: odometry and pan at its stamp, then CameraInfo and the pair.
+  void Frame(int64_t stamp, double x, double pan, bool blank) {
+    Odometry(stamp, x);
+    sensor_msgs::msg::JointState joints;
+    dds::ToJointState({stamp, {"pan"}, {pan}}, &joints);
+    joints_.Write(joints);
+    Pace();
+    sensor_msgs::msg::CameraInfo info;
+    dds::ToCameraInfo(Camera(0.0), stamp, "cam0_optical", &info);
+    left_info_.Write(info);
+    dds::ToCameraInfo(Camera(kBaseline), stamp, "cam1_optical", &info);
+    right_info_.Write(info);
+    cv::Mat left(kHeight, kWidth, CV_8UC1, cv::Scalar(128)), right = left.clone();
+    if (!blank) {
+      // Vertical bars of random grey: a plane at fx B / d = 1 m (d = 10 px).
+      cv::Mat wide(kHeight, kWidth + 20, CV_8UC1);
+      cv::RNG rng(static_cast<uint64_t>(stamp));
+      for (int c = 0; c < wide.cols;) {
+        const int w = 3 + rng.uniform(0, 6);
+        wide.colRange(c, std::min(wide.cols, c + w)).setTo(rng.uniform(30, 230));
+        c += w;
+      }
+      cv::GaussianBlur(wide, wide, cv::Size(0, 0), 0.8);
+      left = wide.colRange(10, 10 + kWidth).clone();
+      right = wide.colRange(20, 20 + kWidth).clone();
+    }
+    sensor_msgs::msg::Image image;
+    dds::MatToImage(left, stamp, "cam0_optical", &image);
+    left_.Write(image);
+    Pace();
+    dds::MatToImage(right, stamp, "cam1_optical", &image);
+    right_.Write(image);
+    Pace();
+  }
+
+ private:
+  static constexpr int kWidth = 160, kHeight = 120;
+  static constexpr double kBaseline = 0.1;
+  static dds::CameraCalibration Camera(double baseline) {
+    dds::CameraCalibration c;
+    c.width = kWidth;
+    c.height = kHeight;
+    c.d = {0, 0, 0, 0, 0};
+    c.k = {100, 0, kWidth / 2.0, 0, 100, kHeight / 2.0, 0, 0, 1};
+    c.p = {100, 0, kWidth / 2.0, -100 * baseline, 0, 100, kHeight / 2.0, 0, 0, 0, 1, 0};
+    return c;
+  }
+  static void Pace() { std::this_thread::sleep_for(std::chrono::milliseconds(20)); }
+
+  dds::Participant participant_;
+  dds::Writer<sensor_msgs::msg::Image, sensor_msgs::msg::ImagePubSubType> left_, right_;
+  dds::Writer<sensor_msgs::msg::CameraInfo, sensor_msgs::msg::CameraInfoPubSubType> left_info_,
+      right_info_;
+  dds::Writer<sensor_msgs::msg::JointState, sensor_msgs::msg::JointStatePubSubType> joints_;
+  dds::Writer<nav_msgs::msg::Odometry, nav_msgs::msg::OdometryPubSubType> odom_;
+};
+
+// Odometry jumping or going back in time, a pan outside the URDF's limits and a key frame
+// without edges: each counted under its reason, the maps keep every good key frame.
+TEST(MapsE2E, BadInputIsCountedAndTheMapsStayIntact) {
+  const auto work = testing::FreshTempDir("maps-bad-input");
+  const uint32_t domain = testing::UniqueDomainId(62);
+  // The building robot's URDF (pan limits +-2.6 rad), from a two-frame recording.
+  const auto rec = work / "rec";
+  const auto [rec_code, rec_out] = testing::RunToCompletion(
+      testing::BinDir() / "epmap-sim",
+      {"record", "--scenario", "building", "--frames", "2", "--out", rec.string()},
+      work / "record.log", std::chrono::seconds(60));
+  ASSERT_EQ(rec_code, 0) << rec_out;
+  testing::Epmapd epmapd(domain, {"--urdf", (rec / "mav0" / "kinematics.urdf").string()}, work);
+  ASSERT_TRUE(epmapd.WaitReady()) << epmapd.process().Output();
+  MobileBasePublisher pub(domain);
+  ASSERT_TRUE(pub.WaitMatched());
+
+  const int64_t t0 = 1'700'000'000'000'000'000;
+  const auto stamp = [&](int i) { return t0 + i * 200'000'000LL; };
+  int good = 0;
+  for (int i = 0; i < 6; ++i, ++good) pub.Frame(stamp(i), 0.3 * i, 0.0, false);
+  pub.Frame(stamp(6), 0.3 * 6 + 5.0, 0.0, false);  // odometry jumps 5 m for one sample
+  pub.Frame(stamp(7), 0.3 * 7, 3.0, false);        // pan beyond its 2.6 rad limit
+  pub.Odometry(stamp(7) - 50'000'000, 0.3 * 7);    // odometry back in time
+  pub.Frame(stamp(8), 0.3 * 8, 0.0, true);         // nothing to see: no edges
+  ++good;
+  pub.Frame(stamp(9), 0.3 * 9, 0.0, false);
+  ++good;
+
+  const auto status = epmapd.WaitStatus(
+      [&](const v1::ServiceStatus& s) {
+        return testing::Epmapd::Count(s.events(), "maps_key_frames") +
+                   testing::Epmapd::Count(s.rejected_by_reason(), "maps:odometry_jump") +
+                   testing::Epmapd::Count(s.rejected_by_reason(), "maps:joint_out_of_range") >=
+               static_cast<uint64_t>(good + 2);
+      },
+      std::chrono::seconds(30));
+  const auto count = [&](const auto& counters, const char* reason) {
+    return testing::Epmapd::Count(counters, reason);
+  };
+  EXPECT_EQ(status.mode(), "mobile-base");
+  EXPECT_EQ(count(status.rejected_by_reason(), "maps:odometry_jump"), 1u) << status.DebugString();
+  EXPECT_EQ(count(status.rejected_by_reason(), "maps:joint_out_of_range"), 1u)
+      << status.DebugString();
+  EXPECT_GE(count(status.rejected_by_reason(), "odometry:stamp_not_increasing"), 1u)
+      << status.DebugString();
+  EXPECT_EQ(count(status.events(), "maps_key_frame_without_edges"), 1u) << status.DebugString();
+  EXPECT_EQ(count(status.events(), "maps_key_frames"), static_cast<uint64_t>(good))
+      << status.DebugString();
+
+  // The maps answer with every good key frame and the newest pose.
+  grpc::ClientContext context;
+  v1::PoseEstimate pose;
+  ASSERT_TRUE(epmapd.stub().GetPose(&context, {}, &pose).ok());
+  EXPECT_EQ(pose.keyframes(), static_cast<uint32_t>(good));
+  EXPECT_NEAR(pose.odometry().x(), 0.3 * 9, 1e-6);
+  EXPECT_TRUE(std::isfinite(pose.corrected().x()) && std::isfinite(pose.corrected().theta()));
+  EXPECT_LT(std::abs(pose.difference().theta()), 0.05);
+  grpc::ClientContext grid_context;
+  v1::GetOccupancyGridRequest request;
+  request.set_layer(3);  // the default grid has 3 height bands
+  v1::OccupancyGrid grid;
+  const auto bad_layer = epmapd.stub().GetOccupancyGrid(&grid_context, request, &grid);
+  EXPECT_EQ(bad_layer.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(bad_layer.error_message().find("layers 0..2"), std::string::npos)
+      << bad_layer.error_message();
+}
+
+}  // namespace
+}  // namespace epmap

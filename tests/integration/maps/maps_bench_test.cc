@@ -1,0 +1,79 @@
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+
+#include "tests/support/planar_world.h"
+#include "tests/support/test_env.h"
+
+namespace epmap {
+namespace {
+
+std::string Slurp(const std::filesystem::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// `epmap-bench maps` end to end on a short synthetic run written in the dataset layout:
+// every output is there, in its documented shape, and the figures are computed.
+TEST(MapsBench, WritesTheMapsAndTheFigures) {
+  const auto dir = testing::FreshTempDir("maps-bench");
+  testing::RunParams rp;
+  rp.pan_stops = {0.0, 0.6, 0.0, -0.6, 0.0};
+  rp.pan_rate = 3.0;
+  const auto run = testing::SimulateRun({{1.0, 1.0}, {2.5, 1.0}, {2.0, 3.0}}, 0.0, rp);
+  testing::WriteRunDataset(testing::PlanarWorld(testing::RoomWalls()), run, dir / "data");
+
+  const auto bench = testing::BinDir() / "epmap-bench";
+  const std::string cmd = bench.string() + " maps --dataset " + (dir / "data").string() +
+                          " --out " + (dir / "out").string() + " --json > " +
+                          (dir / "figures.txt").string();
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+
+  const std::string figures = Slurp(dir / "figures.txt");
+  for (const char* key :
+       {"\"odometry_final_error_deg\":", "\"corrected_final_error_deg\":",
+        "\"wall_coverage_0p5m\":", "\"stray_share_1m\":", "\"iou\":", "\"no_heading_correction\":",
+        "\"per_key_frame_ms_median\":", "\"baseline_sgbm_ms_median\":"}) {
+    EXPECT_NE(figures.find(key), std::string::npos) << key << " missing in " << figures;
+  }
+  EXPECT_EQ(figures.find("null"), std::string::npos) << figures;
+
+  const std::string pmap = Slurp(dir / "out" / "pmap.json");
+  EXPECT_NE(pmap.find("\"segments\":[{\"id\":"), std::string::npos);
+  EXPECT_NE(pmap.find("\"path\":[["), std::string::npos);
+  EXPECT_NE(pmap.find("\"boundary\":["), std::string::npos);
+  const std::string pgm = Slurp(dir / "out" / "grid.pgm");
+  EXPECT_EQ(pgm.substr(0, 3), "P5\n");
+  const std::string yaml = Slurp(dir / "out" / "grid.yaml");
+  for (const char* key : {"image: grid.pgm", "resolution:", "origin: [", "negate: 0",
+                          "occupied_thresh:", "free_thresh:"}) {
+    EXPECT_NE(yaml.find(key), std::string::npos) << key;
+  }
+  const std::string poses = Slurp(dir / "out" / "poses.csv");
+  EXPECT_EQ(poses.rfind("#timestamp [ns],x [m],y [m],theta [rad]\n", 0), 0u);
+  EXPECT_TRUE(std::filesystem::exists(dir / "out" / "pmap.svg"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "out" / "grid.png"));
+
+  // A map compared with itself has the same shape.
+  const std::string again = bench.string() + " maps --no-variants --dataset " +
+                            (dir / "data").string() + " --out " + (dir / "out2").string() +
+                            " --json --compare " + (dir / "out" / "pmap.json").string() + " > " +
+                            (dir / "figures2.txt").string();
+  ASSERT_EQ(std::system(again.c_str()), 0) << again;
+  EXPECT_NE(Slurp(dir / "figures2.txt").find("\"shape_similarity\":1.0000"), std::string::npos)
+      << Slurp(dir / "figures2.txt");
+
+  // A folder that is not a mobile-base dataset is refused with a reason.
+  const std::string bad = bench.string() + " maps --dataset " + dir.string() + " --out " +
+                          (dir / "out3").string() + " 2> " + (dir / "err.txt").string();
+  EXPECT_NE(std::system(bad.c_str()), 0);
+  EXPECT_NE(Slurp(dir / "err.txt").find("epmap-bench maps:"), std::string::npos);
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace epmap

@@ -1,0 +1,68 @@
+#include <gtest/gtest.h>
+
+#include "perception/mobile_mapping/map_evaluation.h"
+
+namespace epmap {
+namespace {
+
+using mobile_mapping::Segment2;
+
+TEST(MapEvaluation, CoveredShareOfWallLength) {
+  const std::vector<Segment2> walls = {{{0, 0}, {10, 0}}, {{0, 5}, {10, 5}}};
+  // A map that holds the first 6 m of the first wall, 30 cm off, and a stray piece.
+  const std::vector<Segment2> map = {{{0, 0.3}, {6, 0.3}}, {{5, 2.5}, {7, 2.5}}};
+  // Within 0.5 m of the piece: x in [0, 6 + sqrt(0.5^2 - 0.3^2)] = 6.4 m of 20 m.
+  EXPECT_NEAR(mobile_mapping::CoveredShare(walls, map, 0.5), 6.4 / 20.0, 0.01);
+  EXPECT_NEAR(mobile_mapping::CoveredShare(walls, map, 0.2), 0.0, 1e-9);
+  // Map length farther than 1 m from any wall: the stray 2 m of 8 m.
+  EXPECT_NEAR(1.0 - mobile_mapping::CoveredShare(map, walls, 1.0), 2.0 / 8.0, 0.01);
+  EXPECT_EQ(mobile_mapping::CoveredShare({}, map, 0.5), 0.0);
+  EXPECT_NEAR(mobile_mapping::TotalLength(walls), 20.0, 1e-12);
+}
+
+TEST(MapEvaluation, VisibleWallsOnly) {
+  // The second wall hides behind the first from a viewpoint below both.
+  const std::vector<Segment2> walls = {{{0, 1}, {10, 1}}, {{2, 3}, {8, 3}}};
+  const std::vector<Segment2> map = {{{0, 1}, {10, 1}}};
+  double visible = 0;
+  const double share =
+      mobile_mapping::CoveredVisibleShare(walls, map, 0.5, {{5, 0}}, 20.0, &visible);
+  EXPECT_NEAR(visible, 10.0, 0.1);
+  EXPECT_NEAR(share, 1.0, 1e-9);
+  // Too far to see anything.
+  mobile_mapping::CoveredVisibleShare(walls, map, 0.5, {{5, 0}}, 0.5, &visible);
+  EXPECT_EQ(visible, 0.0);
+}
+
+TEST(MapEvaluation, GridIouAgainstRasterisedWalls) {
+  occupancy::GridExport g;
+  g.resolution_m = 0.1;
+  g.origin_x = 0;
+  g.origin_y = 0;
+  g.width = 20;
+  g.height = 10;
+  g.occupancy.assign(200, 0);
+  g.confidence.assign(200, 200);
+  // A wall along y = 0.55 (through cell centres of row 5) from x = 0.05 to 1.05: 11 cells.
+  const std::vector<Segment2> walls = {{{0.05, 0.55}, {1.05, 0.55}}};
+  for (int c = 0; c <= 10; ++c) g.occupancy[5 * 20 + c] = 100;
+  auto s = mobile_mapping::ScoreGrid(g, walls);
+  EXPECT_EQ(s.wall_cells, 11u);
+  EXPECT_EQ(s.occupied, 11u);
+  EXPECT_DOUBLE_EQ(s.iou, 1.0);
+  // Half the wall missed, two stray cells, a row of the wall unknown.
+  for (int c = 6; c <= 10; ++c) g.occupancy[5 * 20 + c] = 0;
+  g.occupancy[0] = g.occupancy[1] = 90;
+  s = mobile_mapping::ScoreGrid(g, walls);
+  EXPECT_EQ(s.intersection, 6u);
+  EXPECT_NEAR(s.iou, 6.0 / (8 + 5), 1e-12);
+  for (int c = 8; c <= 10; ++c) g.occupancy[5 * 20 + c] = occupancy::GridExport::kUnknown;
+  s = mobile_mapping::ScoreGrid(g, walls);
+  EXPECT_EQ(s.wall_cells_observed, 8u);
+  EXPECT_NEAR(s.iou_observed, 6.0 / (8 + 2), 1e-12);
+  // A wall exactly on a cell boundary touches the cells on both sides.
+  EXPECT_EQ(mobile_mapping::ScoreGrid(g, {{{0.05, 0.5}, {0.15, 0.5}}}).wall_cells, 4u);
+}
+
+}  // namespace
+}  // namespace epmap

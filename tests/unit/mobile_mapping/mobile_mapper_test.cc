@@ -1,0 +1,218 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "perception/localisation/pose_corrector.h"
+#include "perception/mobile_mapping/key_frame_selector.h"
+#include "perception/mobile_mapping/map_evaluation.h"
+#include "perception/mobile_mapping/mobile_mapper.h"
+#include "tests/support/planar_world.h"
+
+namespace epmap {
+namespace {
+
+using localisation::HeadingOf;
+using localisation::MakePose;
+using mobile_mapping::KeyFrame;
+using mobile_mapping::MobileMapper;
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+// A short run in the test room, rendered once for all tests: 1 m east, a quarter turn, 2 m
+// north, stopping to pan (short pans, to keep the test fast); odometry over-counts turns by 4%.
+class MobileMapperTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    testing::RunParams rp;
+    rp.pan_stops = {0.0, 0.5, 0.0, -0.5, 0.0};
+    rp.pan_rate = 2.5;
+    const auto run = testing::SimulateRun({{1.0, 1.0}, {2.0, 1.0}, {2.0, 3.0}}, 0.0, rp);
+    const testing::PlanarWorld world(testing::RoomWalls());
+    const auto cam = testing::BumblebeeLikeCamera();
+    mobile_mapping::KeyFrameSelector selector;
+    frames_ = new std::vector<KeyFrame>;
+    truth_ = new std::vector<Eigen::Vector3d>;
+    for (size_t i = 0; i < run.size(); ++i) {
+      const auto& r = run[i];
+      const Eigen::Isometry2d odo = MakePose(r.odometry.x(), r.odometry.y(), r.odometry.z());
+      const Eigen::Isometry3d T_base_cam = testing::CameraOnBase(r.pan);
+      if (!selector.Consider(odo, T_base_cam)) continue;
+      const Eigen::Isometry3d T_world_cam = testing::BaseInWorld(r.truth) * T_base_cam;
+      Eigen::Isometry3d T_world_right = T_world_cam;
+      T_world_right.translation() += T_world_cam.linear().col(0) * cam.baseline_m;
+      KeyFrame f;
+      f.stamp_ns = r.stamp_ns;
+      f.left = world.Render(T_world_cam, cam, static_cast<uint32_t>(2 * i));
+      f.right = world.Render(T_world_right, cam, static_cast<uint32_t>(2 * i + 1));
+      f.T_odom_base = odo;
+      f.T_base_cam = T_base_cam;
+      f.joint_positions = {r.pan};
+      frames_->push_back(f);
+      truth_->push_back(r.truth);
+    }
+  }
+  static void TearDownTestSuite() {
+    delete frames_;
+    delete truth_;
+  }
+
+  static mobile_mapping::MobileMapperParams Params() {
+    mobile_mapping::MobileMapperParams p;
+    p.view_min_key_frames = 2;  // this run pans at its stops
+    p.joint_limits = {{"pan", -1.7, 1.7}};
+    return p;
+  }
+
+  // Truth in the odometry/world frame (the robot's start pose).
+  static Eigen::Vector3d TruthInStart(size_t k) {
+    const auto& t0 = truth_->front();
+    const Eigen::Isometry2d T = MakePose(t0.x(), t0.y(), t0.z()).inverse() *
+                                MakePose((*truth_)[k].x(), (*truth_)[k].y(), (*truth_)[k].z());
+    return {T.translation().x(), T.translation().y(), HeadingOf(T)};
+  }
+
+  static std::vector<KeyFrame>* frames_;
+  static std::vector<Eigen::Vector3d>* truth_;
+};
+
+std::vector<KeyFrame>* MobileMapperTest::frames_ = nullptr;
+std::vector<Eigen::Vector3d>* MobileMapperTest::truth_ = nullptr;
+
+TEST_F(MobileMapperTest, BuildsBothMapsAndCorrectsTheHeading) {
+  MobileMapper mapper(testing::BumblebeeLikeCamera(), Params());
+  for (const auto& f : *frames_) {
+    const auto report = mapper.AddKeyFrame(f);
+    ASSERT_TRUE(report.accepted) << report.rejection->message;
+  }
+  mapper.Flush();
+  const auto snap = mapper.Snapshot();
+  ASSERT_EQ(snap->poses.size(), frames_->size());
+  EXPECT_GE(snap->counters.views, 3u);
+  EXPECT_GT(snap->counters.visual_heading, 5u);
+  const auto last = TruthInStart(frames_->size() - 1);
+  const double odo_error = std::abs(
+      localisation::WrapAngle(HeadingOf(snap->poses.back().T_world_base_odometry) - last.z()));
+  const double cor_error =
+      std::abs(localisation::WrapAngle(HeadingOf(snap->poses.back().T_world_base) - last.z()));
+  EXPECT_GT(odo_error, 3 * kDeg);  // 4% of a quarter turn
+  EXPECT_LT(cor_error, 1 * kDeg);
+
+  // Both maps, in the start frame, lie on the room's walls.
+  const auto& t0 = truth_->front();
+  const Eigen::Isometry2d T_start_world = MakePose(t0.x(), t0.y(), t0.z()).inverse();
+  std::vector<mobile_mapping::Segment2> walls;
+  for (const auto& w : testing::RoomWalls())
+    walls.push_back({T_start_world * w.a, T_start_world * w.b});
+  std::vector<mobile_mapping::Segment2> segments;
+  for (const auto& s : snap->perceptual.segments) segments.push_back({s.a, s.b});
+  ASSERT_GT(segments.size(), 20u);
+  EXPECT_GT(mobile_mapping::CoveredShare(segments, walls, 0.3), 0.9);  // map on the walls
+  const auto grid = snap->grid.Export();
+  EXPECT_GT(mobile_mapping::ScoreGrid(grid, walls).intersection, 50u);
+  EXPECT_GE(snap->perceptual.path.size(), 3u);
+}
+
+// view_min_key_frames = 0 (the service's setting): this run pans at its stops, so once it has
+// been seen panning the moving key frames make no views (with 1 every group would be a view).
+TEST_F(MobileMapperTest, AutomaticViewSizeFollowsPanningStops) {
+  auto p = Params();
+  p.view_min_key_frames = 0;
+  MobileMapper mapper(testing::BumblebeeLikeCamera(), p);
+  for (const auto& f : *frames_) ASSERT_TRUE(mapper.AddKeyFrame(f).accepted);
+  mapper.Flush();
+  const auto& c = mapper.counters();
+  EXPECT_GE(c.views, 3u);
+  EXPECT_GT(c.groups_too_short, 0u);
+  EXPECT_EQ(c.views + c.groups_too_short, c.groups);
+}
+
+TEST_F(MobileMapperTest, RefusesBadKeyFramesAndKeepsTheMapsIntact) {
+  MobileMapper mapper(testing::BumblebeeLikeCamera(), Params());
+  const size_t half = frames_->size() / 2;
+  for (size_t i = 0; i < half; ++i) mapper.AddKeyFrame((*frames_)[i]);
+  mapper.Flush();
+  const auto before = mapper.Snapshot();
+  const KeyFrame& last = (*frames_)[half - 1];
+
+  const auto refused = [&](KeyFrame f, const std::string& reason) {
+    const auto r = mapper.AddKeyFrame(f);
+    EXPECT_FALSE(r.accepted) << reason;
+    ASSERT_TRUE(r.rejection.has_value()) << reason;
+    EXPECT_EQ(r.rejection->reason, reason) << r.rejection->message;
+    EXPECT_FALSE(r.rejection->message.empty());
+  };
+  KeyFrame back = last;  // going backwards in time
+  back.stamp_ns -= 1'000'000;
+  refused(back, "stamp_not_increasing");
+  KeyFrame jump = last;  // odometry jumping 5 m in 0.2 s
+  jump.stamp_ns += 200'000'000;
+  jump.T_odom_base = last.T_odom_base * MakePose(5, 0, 0);
+  refused(jump, "odometry_jump");
+  KeyFrame nan = jump;
+  nan.T_odom_base = MakePose(std::nan(""), 0, 0);
+  refused(nan, "odometry_not_finite");
+  KeyFrame pan = last;  // pan beyond the joint's limits
+  pan.stamp_ns += 200'000'000;
+  pan.joint_positions = {2.5};
+  refused(pan, "joint_out_of_range");
+  KeyFrame small = pan;
+  small.joint_positions = {0.0};
+  small.left = cv::Mat(120, 160, CV_8UC1, cv::Scalar(0));
+  refused(small, "image_size");
+  KeyFrame none = pan;
+  none.joint_positions = {0.0};
+  none.right = cv::Mat();
+  refused(none, "image_missing");
+
+  const auto after = mapper.Snapshot();
+  EXPECT_EQ(after->counters.rejected, 6u);
+  EXPECT_EQ(after->counters.rejected_by_reason.at("odometry_jump"), 1u);
+  EXPECT_EQ(after->poses.size(), before->poses.size());
+  EXPECT_EQ(after->perceptual.segments.size(), before->perceptual.segments.size());
+  EXPECT_EQ(after->grid.Export().occupancy, before->grid.Export().occupancy);
+  // The run goes on where it was.
+  EXPECT_TRUE(mapper.AddKeyFrame((*frames_)[half]).accepted);
+}
+
+TEST_F(MobileMapperTest, AStopWithNoEdgesIsCountedNotFatal) {
+  MobileMapper mapper(testing::BumblebeeLikeCamera(), Params());
+  for (size_t i = 0; i < 6; ++i) mapper.AddKeyFrame((*frames_)[i]);
+  // Two blank key frames at one new base pose (a stop facing a plain wall in the dark), then
+  // the base moves on.
+  const KeyFrame& last = (*frames_)[5];
+  const cv::Mat blank(240, 320, CV_8UC1, cv::Scalar(90));
+  KeyFrame a = last;
+  a.stamp_ns += 1'000'000'000;
+  a.T_odom_base = last.T_odom_base * MakePose(0.3, 0, 0);
+  a.left = a.right = blank;
+  KeyFrame b = a;
+  b.stamp_ns += 200'000'000;
+  b.T_base_cam = testing::CameraOnBase(0.4);
+  b.joint_positions = {0.4};
+  KeyFrame c = b;
+  c.stamp_ns += 1'000'000'000;
+  c.T_odom_base = b.T_odom_base * MakePose(0.3, 0, 0);
+  const auto segments_before = mapper.Snapshot()->perceptual.segments.size();
+  EXPECT_TRUE(mapper.AddKeyFrame(a).accepted);
+  EXPECT_TRUE(mapper.AddKeyFrame(b).accepted);
+  const auto r = mapper.AddKeyFrame(c);
+  EXPECT_TRUE(r.accepted);
+  EXPECT_TRUE(r.group_closed);
+  EXPECT_TRUE(r.view_skipped);
+  EXPECT_EQ(mapper.counters().views_without_objects, 1u);
+  EXPECT_EQ(r.heading_source, localisation::HeadingSource::kOdometry);  // nothing to track
+  EXPECT_GE(mapper.Snapshot()->perceptual.segments.size(), segments_before);
+}
+
+TEST(MobileMapper, BadConfigurationIsRefused) {
+  auto cam = testing::BumblebeeLikeCamera();
+  mobile_mapping::MobileMapperParams p;
+  p.view_min_key_frames = -1;
+  EXPECT_THROW(MobileMapper(cam, p), std::invalid_argument);
+  cam.baseline_m = 0;
+  EXPECT_THROW(MobileMapper(cam, {}), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace epmap

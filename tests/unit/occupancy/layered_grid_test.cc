@@ -1,0 +1,203 @@
+#include <gtest/gtest.h>
+
+#include "perception/occupancy/layered_grid.h"
+
+namespace epmap {
+namespace {
+
+using occupancy::LayeredGrid;
+
+// Default layers: [0.1, 0.7), [0.7, 1.3), [1.3, 2.0) above the floor; 10 cm cells.
+TEST(LayeredGrid, ARayMarksEmptyCellsUpToThePointAndTheOccupiedCellAtIt) {
+  LayeredGrid g;
+  const occupancy::MeasurementParams mp;
+  ASSERT_TRUE(g.AddPoint({0.05, 0.05, 1.0}, {3.05, 0.05, 1.0}, 0.01, mp));
+  // Camera height 1.0 m: layer 1. Cells between the head and the point are empty...
+  for (int ix = 0; ix < 29; ++ix) {
+    const auto c = g.At(1, ix, 0);
+    EXPECT_NEAR(c.empty, mp.empty_evidence, 1e-6) << ix;
+    EXPECT_EQ(c.occupied, 0.0F) << ix;
+    EXPECT_GT(c.confidence, 0.0F);
+  }
+  // ... the point's cell is occupied, nothing beyond it is touched.
+  EXPECT_NEAR(g.At(1, 30, 0).occupied, mp.occupied_evidence, 1e-6);
+  EXPECT_EQ(g.At(1, 30, 0).empty, 0.0F);
+  EXPECT_EQ(g.At(1, 31, 0).confidence, 0.0F);
+  // Other layers and rows are untouched.
+  EXPECT_EQ(g.At(0, 10, 0).confidence, 0.0F);
+  EXPECT_EQ(g.At(2, 10, 0).confidence, 0.0F);
+  EXPECT_EQ(g.At(1, 10, 1).confidence, 0.0F);
+  // A second point on the same ray: the fuzzy union raises the memberships.
+  g.AddPoint({0.05, 0.05, 1.0}, {3.05, 0.05, 1.0}, 0.01, mp);
+  EXPECT_NEAR(g.At(1, 5, 0).empty, 1 - (1 - mp.empty_evidence) * (1 - mp.empty_evidence), 1e-6);
+}
+
+TEST(LayeredGrid, ARayToTheFloorCrossesLayersAndMarksNoObstacle) {
+  LayeredGrid g;
+  const occupancy::MeasurementParams mp;
+  ASSERT_TRUE(g.AddPoint({0.05, 0.05, 1.0}, {2.05, 0.05, 0.0}, 0.01, mp));
+  // Heights along the ray fall from 1.0 to 0: layer 1 near the head, layer 0 farther, then
+  // the floor band (below 0.1 m), which is no layer.
+  EXPECT_GT(g.At(1, 3, 0).empty, 0.0F);
+  EXPECT_EQ(g.At(0, 3, 0).empty, 0.0F);
+  EXPECT_GT(g.At(0, 12, 0).empty, 0.0F);
+  EXPECT_EQ(g.At(1, 12, 0).empty, 0.0F);
+  for (int l = 0; l < g.layer_count(); ++l) {
+    for (int ix = 0; ix < 25; ++ix) EXPECT_EQ(g.At(l, ix, 0).occupied, 0.0F);
+  }
+}
+
+TEST(LayeredGrid, VaguePointsCountLessAndFarOnesNotAtAll) {
+  LayeredGrid g;
+  const occupancy::MeasurementParams mp;
+  g.AddPoint({0.05, 0.05, 1.0}, {2.05, 0.05, 1.0}, 0.01, mp);
+  g.AddPoint({0.05, 1.05, 1.0}, {2.05, 1.05, 1.0}, 0.4, mp);  // 4 cells of depth uncertainty
+  EXPECT_GT(g.At(1, 20, 0).occupied, 3 * g.At(1, 20, 10).occupied);
+  // Empty evidence stops two sigmas (80 cm) before the vague point.
+  EXPECT_GT(g.At(1, 11, 10).empty, 0.0F);
+  EXPECT_EQ(g.At(1, 13, 10).empty, 0.0F);
+  EXPECT_FALSE(g.AddPoint({0, 0, 1}, {mp.max_range_m + 1, 0, 1}, 0.01, mp));
+  EXPECT_FALSE(g.AddPoint({0, 0, 1}, {std::nan(""), 0, 1}, 0.01, mp));
+  EXPECT_FALSE(g.AddPoint({0, 0, 1}, {0, 0, 0.5}, 0.01, mp));  // straight down: no cell to mark
+}
+
+TEST(LayeredGrid, CombinedMapAndSyntheticMap) {
+  LayeredGrid g;
+  const occupancy::MeasurementParams mp;
+  // A low obstacle (layer 0) at x = 2, seen over free space in layer 1.
+  for (int k = 0; k < 5; ++k) g.AddPoint({0.05, 0.05, 0.4}, {2.05, 0.05, 0.4}, 0.01, mp);
+  for (int k = 0; k < 5; ++k) g.AddPoint({0.05, 0.05, 1.0}, {4.05, 0.05, 1.0}, 0.01, mp);
+  const auto c = g.Combined(20, 0);
+  EXPECT_NEAR(c.occupied, g.At(0, 20, 0).occupied, 1e-6);
+  EXPECT_LE(c.empty, 1.0F - c.occupied + 1e-6F);  // E = min(max_l E_l, 1 - O)
+  EXPECT_GT(c.occupied, c.empty);
+  const cv::Mat m = g.SyntheticMap();
+  const int col = static_cast<int>(20 - g.min_ix()), row = static_cast<int>(0 - g.min_iy());
+  // M = U_l (O_l n K_l).
+  const float expect = std::max(std::min(g.At(0, 20, 0).occupied, g.At(0, 20, 0).confidence),
+                                std::min(g.At(1, 20, 0).occupied, g.At(1, 20, 0).confidence));
+  EXPECT_FLOAT_EQ(m.at<float>(row, col), expect);
+  EXPECT_EQ(m.at<float>(row, static_cast<int>(10 - g.min_ix())), 0.0F);  // empty cell
+}
+
+TEST(LayeredGrid, AQueryForALayerThatDoesNotExistIsAClearErrorAndChangesNothing) {
+  LayeredGrid g;
+  g.AddPoint({0, 0, 1}, {2, 0, 1}, 0.01, {});
+  const auto before = g.Export();
+  try {
+    g.Export(7);
+    FAIL() << "expected std::out_of_range";
+  } catch (const std::out_of_range& e) {
+    EXPECT_NE(std::string(e.what()).find("layer 7"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(g.At(-1, 0, 0), std::out_of_range);
+  EXPECT_EQ(g.Export().occupancy, before.occupancy);
+  EXPECT_NO_THROW(g.Export(2));
+}
+
+TEST(LayeredGrid, GrowsAndKeepsWhatItHad) {
+  LayeredGrid g(occupancy::GridParams{0.1, {0.10, 0.70, 1.30, 2.00}, 1.0});  // 1 m margin
+  g.AddPoint({0.05, 0.05, 1.0}, {1.05, 0.05, 1.0}, 0.01, {});
+  const auto cell = g.At(1, 10, 0);
+  EXPECT_GT(g.origin().x(), -3.0);
+  g.AddPoint({0.05, 0.05, 1.0}, {-3.05, 3.05, 1.0}, 0.01, {});
+  EXPECT_FLOAT_EQ(g.At(1, 10, 0).occupied, cell.occupied);
+  EXPECT_LE(g.origin().x(), -3.1);
+  EXPECT_GT(g.At(1, -31, 30).occupied, 0.0F);
+  // Copies are deep: changing the original leaves the copy as it was.
+  const LayeredGrid copy = g;
+  g.AddPoint({0.05, 0.05, 1.0}, {1.05, 0.05, 1.0}, 0.01, {});
+  EXPECT_FLOAT_EQ(copy.At(1, 10, 0).occupied, cell.occupied);
+  EXPECT_GT(g.At(1, 10, 0).occupied, cell.occupied);
+}
+
+// Walls seen from a few places: the map used as both the global map and, shifted, as the
+// local one. Walls run through cell centres (5 cm off the lattice) so that rounding at cell
+// boundaries cannot decide the answer.
+LayeredGrid Room(Eigen::Vector2d offset) {
+  offset += Eigen::Vector2d(0.05, 0.05);
+  LayeredGrid g;
+  const occupancy::MeasurementParams mp;
+  const std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> walls = {
+      {{0, 0}, {6, 0}}, {{6, 0}, {6, 4}}, {{6, 4}, {2, 4}}, {{2, 4}, {2, 2.5}}};
+  for (const Eigen::Vector2d& view : {Eigen::Vector2d(3, 2), Eigen::Vector2d(4.5, 1.5)}) {
+    for (const auto& [a, b] : walls) {
+      for (double t = 0; t <= 1; t += 0.01) {
+        const Eigen::Vector2d p = a + t * (b - a) + offset;
+        for (double z : {0.5, 1.0, 1.5}) {
+          g.AddPoint({view.x() + offset.x(), view.y() + offset.y(), 1.0}, {p.x(), p.y(), z}, 0.02,
+                     mp);
+        }
+      }
+    }
+  }
+  return g;
+}
+
+TEST(Correlation, RecoversAKnownShift) {
+  const LayeredGrid global = Room({0, 0});
+  const LayeredGrid local = Room({0.3, -0.2});  // the robot thinks it is 30 cm / -20 cm off
+  const auto reg = occupancy::CorrelateMaps(local, global, 0.6);
+  EXPECT_EQ(reg.dx_cells, -3);
+  EXPECT_EQ(reg.dy_cells, 2);
+  EXPECT_NEAR(reg.dx_m, -0.3, 0.05);
+  EXPECT_NEAR(reg.dy_m, 0.2, 0.05);
+  EXPECT_GT(reg.score, 2 * reg.zero_score);
+  EXPECT_GT(reg.local_cells, 50u);
+  // Outside the search window the shift cannot be found (and nothing pretends it was).
+  const auto narrow = occupancy::CorrelateMaps(local, global, 0.1);
+  EXPECT_LE(std::abs(narrow.dx_cells), 1);
+  LayeredGrid coarse(occupancy::GridParams{0.2, {0.1, 1.0}, 1.0});
+  EXPECT_THROW(occupancy::CorrelateMaps(coarse, global, 0.5), std::invalid_argument);
+}
+
+TEST(Correlation, ACorridorFixesOnlyTheAxisAcrossIt) {
+  // Two long parallel walls along x: the correlation peak is sharp across (y), flat along (x).
+  const auto corridor = [](double dx) {
+    LayeredGrid g;
+    for (double x = 0.05; x < 12; x += 0.02) {
+      for (double y : {-0.95, 1.05}) {
+        g.AddPoint({6.05 + dx, 0.05, 1.0}, {x + dx, y, 1.0}, 0.02, occupancy::MeasurementParams{});
+      }
+    }
+    return g;
+  };
+  const auto reg = occupancy::CorrelateMaps(corridor(0.2), corridor(0.0), 0.5);
+  EXPECT_GT(reg.sharpness_y, 0.5);
+  EXPECT_LT(reg.sharpness_x, 0.05);
+  EXPECT_EQ(reg.dy_cells, 0);
+}
+
+TEST(Merge, WeightedAveragingByConfidence) {
+  LayeredGrid global, local;
+  const occupancy::MeasurementParams mp;
+  global.AddPoint({0.05, 0.05, 1.0}, {2.05, 0.05, 1.0}, 0.01, mp);  // cell 20 occupied
+  local.AddPoint({0.05, 0.05, 1.0}, {3.05, 0.05, 1.0}, 0.01, mp);   // cell 20 seen empty
+  const auto g = global.At(1, 20, 0), l = local.At(1, 20, 0);
+  LayeredGrid merged = global;
+  merged.MergeWeighted(local);
+  const auto m = merged.At(1, 20, 0);
+  EXPECT_NEAR(
+      m.occupied,
+      (g.confidence * g.occupied + l.confidence * l.occupied) / (g.confidence + l.confidence),
+      1e-6);
+  EXPECT_NEAR(m.empty,
+              (g.confidence * g.empty + l.confidence * l.empty) / (g.confidence + l.confidence),
+              1e-6);
+  EXPECT_NEAR(m.confidence, g.confidence + l.confidence - g.confidence * l.confidence, 1e-6);
+  // Into an empty grid the local map arrives as it is, shifted as asked.
+  LayeredGrid empty;
+  empty.MergeWeighted(local, 2, -1);
+  EXPECT_FLOAT_EQ(empty.At(1, 32, -1).occupied, local.At(1, 30, 0).occupied);
+  LayeredGrid other_layers(occupancy::GridParams{0.1, {0.1, 1.0}, 1.0});
+  EXPECT_THROW(other_layers.MergeWeighted(local), std::invalid_argument);
+}
+
+TEST(LayeredGrid, BadParametersAreRefused) {
+  EXPECT_THROW(LayeredGrid(occupancy::GridParams{0.0, {0.1, 1.0}, 1.0}), std::invalid_argument);
+  EXPECT_THROW(LayeredGrid(occupancy::GridParams{0.1, {1.0, 0.1}, 1.0}), std::invalid_argument);
+  EXPECT_THROW(LayeredGrid(occupancy::GridParams{0.1, {0.1}, 1.0}), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace epmap

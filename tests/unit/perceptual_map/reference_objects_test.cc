@@ -1,0 +1,88 @@
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "perception/perceptual_map/reference_objects.h"
+
+namespace epmap {
+namespace {
+
+TEST(ReferenceObjects, RegressionLineEndPointsFollowEquationsThreeAndFour) {
+  // z = 0.5 x + 1 sampled on x in [1, 3] with small noise.
+  std::mt19937 rng(1);
+  std::normal_distribution<double> n(0, 0.005);
+  std::vector<Eigen::Vector2d> pts;
+  for (int i = 0; i <= 40; ++i) {
+    const double x = 1 + i * 0.05;
+    pts.emplace_back(x, 0.5 * x + 1 + n(rng));
+  }
+  perceptual_map::ReferenceObject o;
+  ASSERT_TRUE(perceptual_map::FitLine(pts, &o));
+  EXPECT_NEAR(o.a.x(), 1.0, 1e-12);  // x_p1 = min x
+  EXPECT_NEAR(o.b.x(), 3.0, 1e-12);  // x_p2 = max x
+  EXPECT_NEAR(o.a.y(), 1.5, 0.01);   // z_p1 = m x_p1 + b (Eq. 3)
+  EXPECT_NEAR(o.b.y(), 2.5, 0.01);   // z_p2 = m x_p2 + b (Eq. 4)
+  EXPECT_LT(o.rms_m, 0.01);
+
+  // A line along the other axis (x constant) swaps the roles instead of failing.
+  std::vector<Eigen::Vector2d> vertical;
+  for (int i = 0; i <= 20; ++i) vertical.emplace_back(2.0, 0.1 * i);
+  ASSERT_TRUE(perceptual_map::FitLine(vertical, &o));
+  EXPECT_NEAR(o.a.x(), 2.0, 1e-12);
+  EXPECT_NEAR(o.b.x(), 2.0, 1e-12);
+  EXPECT_NEAR(o.length(), 2.0, 1e-12);
+
+  EXPECT_FALSE(perceptual_map::FitLine({{1, 1}}, &o));
+  EXPECT_FALSE(perceptual_map::FitLine({{1, 1}, {1, 1}}, &o));
+}
+
+TEST(ReferenceObjects, GridClusteringMakesOneLinePerCellAndDropsShortOnes) {
+  std::vector<Eigen::Vector2d> pts;
+  for (int i = 0; i < 100; ++i) pts.emplace_back(0.01 + 0.0198 * i, 1.2);  // 2 m wall at y=1.2
+  for (int i = 0; i < 10; ++i) pts.emplace_back(3.201 + 0.003 * i, -1.0);  // 3 cm piece
+  perceptual_map::ClusteringParams p;
+  p.cell_size_m = 0.5;
+  const auto objects = perceptual_map::FitReferenceObjects(pts, Eigen::Isometry2d::Identity(), p);
+  // The wall crosses cells [0, 0.5), ..., [1.5, 2.0): four objects; the 3 cm piece is dropped.
+  ASSERT_EQ(objects.size(), 4u);
+  for (const auto& o : objects) {
+    EXPECT_NEAR(o.a.y(), 1.2, 1e-9);
+    EXPECT_NEAR(o.length(), 0.48, 0.03);
+  }
+  // With a grid turned by the view's pose, the cells move with the world, not with the robot.
+  Eigen::Isometry2d T = Eigen::Isometry2d::Identity();
+  T.translation() = Eigen::Vector2d(0.25, 0);
+  EXPECT_EQ(perceptual_map::FitReferenceObjects(pts, T, p).size(), 5u);
+}
+
+TEST(ReferenceObjects, FarLinesAlongTheLineOfSightAreDepthNoise) {
+  // Points spread along the line of sight (as stereo depth noise spreads a far wall's points):
+  // dropped beyond 4 m, kept near (where a line of sight along a wall is a real wall).
+  std::vector<Eigen::Vector2d> far, near;
+  for (int i = 0; i < 20; ++i) {
+    far.emplace_back(6.05 + 0.02 * i, 1.05 + 0.003 * i);
+    near.emplace_back(2.05 + 0.02 * i, 0.55 + 0.003 * i);
+  }
+  const auto id = Eigen::Isometry2d::Identity();
+  EXPECT_TRUE(perceptual_map::FitReferenceObjects(far, id, {}).empty());
+  EXPECT_EQ(perceptual_map::FitReferenceObjects(near, id, {}).size(), 1u);
+  perceptual_map::ClusteringParams off;
+  off.radial_max_angle_rad = 0;
+  EXPECT_EQ(perceptual_map::FitReferenceObjects(far, id, off).size(), 1u);
+}
+
+TEST(ReferenceObjects, CellsWithoutALineAreDropped) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(0.0, 0.49);
+  std::vector<Eigen::Vector2d> clutter;
+  for (int i = 0; i < 50; ++i) clutter.emplace_back(u(rng), u(rng));
+  EXPECT_TRUE(
+      perceptual_map::FitReferenceObjects(clutter, Eigen::Isometry2d::Identity(), {}).empty());
+  perceptual_map::ClusteringParams bad;
+  bad.cell_size_m = 0;
+  EXPECT_THROW(perceptual_map::FitReferenceObjects(clutter, Eigen::Isometry2d::Identity(), bad),
+               std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace epmap
