@@ -1,5 +1,6 @@
 #include "perception/ep/expected_perception.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -85,14 +86,21 @@ cv::Mat Decimate(const cv::Mat& image, int step) {
   return out;
 }
 
-// A mask of the comparison grid back at full resolution (each grid pixel covers step x step).
+// A mask of the comparison grid back at full resolution (each grid pixel covers step x step):
+// one row widened, then copied to the step rows it covers.
 cv::Mat Upsample(const cv::Mat& grid_mask, const cv::Size& size, int step) {
   if (step == 1) return grid_mask;
   cv::Mat out(size, CV_8U);
-  for (int v = 0; v < size.height; ++v) {
+  for (int v = 0; v < size.height; v += step) {
     const uint8_t* src = grid_mask.ptr<uint8_t>(v / step);
     uint8_t* dst = out.ptr<uint8_t>(v);
-    for (int u = 0; u < size.width; ++u) dst[u] = src[u / step];
+    for (int j = 0, u = 0; u < size.width; ++j) {
+      const uint8_t value = src[j];
+      for (int k = 0; k < step && u < size.width; ++k, ++u) dst[u] = value;
+    }
+    for (int r = 1; r < step && v + r < size.height; ++r) {
+      std::copy_n(dst, size.width, out.ptr<uint8_t>(v + r));
+    }
   }
   return out;
 }
@@ -432,6 +440,7 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
       const uint8_t* rec = res->recompute.ptr<uint8_t>(v);
       const uint8_t* moved = res->unexpected.ptr<uint8_t>(v);
       const uint8_t* carried = predicted ? pred.flags.ptr<uint8_t>(v) : nullptr;
+      const uint8_t* hole = predicted ? pred.holes.ptr<uint8_t>(v) : nullptr;
       const uint8_t* later = deferred.empty() ? nullptr : deferred.ptr<uint8_t>(v);
       uint8_t* flags = state_.flags.ptr<uint8_t>(v);
       const float ray_y = static_cast<float>((v - camera_.cy) / camera_.fy);
@@ -447,7 +456,7 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
         float d;
         if (!predicted || rec[u]) {
           d = fresh[u] > kMinPointDisparity ? fresh[u] : fill[static_cast<size_t>(u)];
-        } else if (!(p[u][2] > 0) && !(later && later[u])) {
+        } else if (hole[u] && !(later && later[u])) {  // no predicted point here
           d = fill[static_cast<size_t>(u)];
         } else {
           continue;  // the predicted point stays
