@@ -351,13 +351,10 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
   t0 = Clock::now();
   if (mode == FrameMode::kPredicted) {
     res->disparity = pred.disparity.clone();
-    cv::Mat expected;
-    if (params_.narrow_search) {
-      expected = pred.geometry.clone();
-      expected.setTo(std::numeric_limits<float>::quiet_NaN(), uncertain);
-    }
+    // Where the geometry is uncertain the search is not narrowed.
     const RoiStereoStats stats =
-        stereo_.ComputeMasked(stereo_left, stereo_right, recompute, res->disparity, expected);
+        stereo_.ComputeMasked(stereo_left, stereo_right, recompute, res->disparity,
+                              params_.narrow_search ? pred.geometry : cv::Mat(), uncertain);
     res->recompute = recompute;
     res->recomputed_share = static_cast<double>(stats.target_pixels) / n_pixels;
     res->stereo_area_share = static_cast<double>(stats.computed_pixels) / n_pixels;
@@ -436,7 +433,16 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
     for (int v = rows.start; v < rows.end; ++v) {
       auto* p = state_.points.ptr<cv::Vec3f>(v);
       const float* fresh = res->disparity.ptr<float>(v);
-      FillUnknownDisparityRow(fresh, fill.data(), size.width);
+      // The row's fill of SGBM's gaps, made only when a pixel of the row needs it (on predicted
+      // frames most rows have none).
+      bool filled = false;
+      const auto fill_at = [&](int u) {
+        if (!filled) {
+          FillUnknownDisparityRow(fresh, fill.data(), size.width);
+          filled = true;
+        }
+        return fill[static_cast<size_t>(u)];
+      };
       const uint8_t* rec = res->recompute.ptr<uint8_t>(v);
       const uint8_t* moved = res->unexpected.ptr<uint8_t>(v);
       const uint8_t* carried = predicted ? pred.flags.ptr<uint8_t>(v) : nullptr;
@@ -455,9 +461,9 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
         flags[u] = f;
         float d;
         if (!predicted || rec[u]) {
-          d = fresh[u] > kMinPointDisparity ? fresh[u] : fill[static_cast<size_t>(u)];
+          d = fresh[u] > kMinPointDisparity ? fresh[u] : fill_at(u);
         } else if (hole[u] && !(later && later[u])) {  // no predicted point here
-          d = fill[static_cast<size_t>(u)];
+          d = fill_at(u);
         } else {
           continue;  // the predicted point stays
         }

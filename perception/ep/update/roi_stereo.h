@@ -67,8 +67,11 @@ class RoiStereo {
   // `expected` (optional, CV_32F, NaN = unknown) narrows each box's search range when (nearly)
   // all its target pixels have an expectation ("over the disparity range it needs"); other
   // boxes search the full range.
+  // `expected_unknown` (optional, CV_8U): non-zero where `expected` is to be treated as unknown
+  // (saves the caller a masked copy of `expected`).
   RoiStereoStats ComputeMasked(const cv::Mat& left, const cv::Mat& right, const cv::Mat& mask,
-                               cv::Mat& disparity, const cv::Mat& expected = cv::Mat());
+                               cv::Mat& disparity, const cv::Mat& expected = cv::Mat(),
+                               const cv::Mat& expected_unknown = cv::Mat());
 
   // The padded boxes SGBM would run on for `mask` (exposed for tests and the benchmark).
   std::vector<RoiBox> PlanBoxes(const cv::Mat& mask) const;
