@@ -251,7 +251,9 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
   auto t0 = Clock::now();
   cv::Mat recompute;
   if (res->compared) {
-    if (params_.recompute_margin_px > 0) {
+    if (cv::countNonZero(cmp.flagged) == 0) {  // nothing unexpected (most frames): no dilation
+      recompute = cv::Mat::zeros(size, CV_8U);
+    } else if (params_.recompute_margin_px > 0) {
       const int k = 2 * params_.recompute_margin_px + 1;
       cv::dilate(flagged, recompute, cv::getStructuringElement(cv::MORPH_RECT, {k, k}));
     } else {
@@ -270,12 +272,14 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
       // re-measured whether or not E notices (the thing may have left a low-texture place).
       cv::Mat dynamic;
       cv::bitwise_and(pred.flags, cv::Scalar(kDynamic), dynamic);
-      if (params_.recompute_margin_px > 0 && cv::countNonZero(dynamic) > 0) {
-        const int k = 2 * params_.recompute_margin_px + 1;
-        cv::dilate(dynamic, dynamic, cv::getStructuringElement(cv::MORPH_RECT, {k, k}));
+      if (cv::countNonZero(dynamic) > 0) {
+        if (params_.recompute_margin_px > 0) {
+          const int k = 2 * params_.recompute_margin_px + 1;
+          cv::dilate(dynamic, dynamic, cv::getStructuringElement(cv::MORPH_RECT, {k, k}));
+        }
+        recompute.setTo(255, dynamic);
+        uncertain.setTo(255, dynamic);
       }
-      recompute.setTo(255, dynamic);
-      uncertain.setTo(255, dynamic);
     }
     // New content along the borders is recomputed once the strip it forms is thick enough to
     // be worth its SGBM box (the box's padding would dwarf a strip of a pixel or two); until
@@ -407,8 +411,11 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
     // No history survives a full restart.
     res->accumulated = cv::Mat::zeros(ComparisonGrid(camera_, step), CV_32F);
   }
-  res->unexpected_share = cv::countNonZero(res->unexpected) / n_pixels;
-  res->regions = LabelRegions(res->unexpected, res->disparity, camera_, T_base_cam0);
+  const int unexpected_pixels = cv::countNonZero(res->unexpected);
+  res->unexpected_share = unexpected_pixels / n_pixels;
+  if (unexpected_pixels > 0) {  // labelling an empty mask still costs a pass over 4-byte labels
+    res->regions = LabelRegions(res->unexpected, res->disparity, camera_, T_base_cam0);
+  }
   res->timings.plan_ms += MsSince(t0);
 
   // The state for the next frame. The result's images are never written again: the next

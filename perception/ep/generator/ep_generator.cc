@@ -614,7 +614,8 @@ Prediction Predict(const MapState& previous, const Eigen::Isometry3d& T_cur_prev
         const float x = r00 * ax + r10 * ay + r20 * az;
         const float y = r01 * ax + r11 * ay + r21 * az;
         const float zk = r02 * ax + r12 * ay + r22 * az;
-        const float qx = fx_ * x / zk + cx_, qy = fy_ * y / zk + cy_;
+        const float inv_zk = 1.0F / zk;
+        const float qx = fx_ * x * inv_zk + cx_, qy = fy_ * y * inv_zk + cy_;
         // Inside frame k (false for NaN): else nothing to sample.
         if (!(zk > min_depth_ && qx >= 0 && qy >= 0 && qx <= w_last && qy <= h_last)) continue;
         valid[j] = 255;
