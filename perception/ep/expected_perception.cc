@@ -1,5 +1,6 @@
 #include "perception/ep/expected_perception.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -85,14 +86,21 @@ cv::Mat Decimate(const cv::Mat& image, int step) {
   return out;
 }
 
-// A mask of the comparison grid back at full resolution (each grid pixel covers step x step).
+// A mask of the comparison grid back at full resolution (each grid pixel covers step x step):
+// one row widened, then copied to the step rows it covers.
 cv::Mat Upsample(const cv::Mat& grid_mask, const cv::Size& size, int step) {
   if (step == 1) return grid_mask;
   cv::Mat out(size, CV_8U);
-  for (int v = 0; v < size.height; ++v) {
+  for (int v = 0; v < size.height; v += step) {
     const uint8_t* src = grid_mask.ptr<uint8_t>(v / step);
     uint8_t* dst = out.ptr<uint8_t>(v);
-    for (int u = 0; u < size.width; ++u) dst[u] = src[u / step];
+    for (int j = 0, u = 0; u < size.width; ++j) {
+      const uint8_t value = src[j];
+      for (int k = 0; k < step && u < size.width; ++k, ++u) dst[u] = value;
+    }
+    for (int r = 1; r < step && v + r < size.height; ++r) {
+      std::copy_n(dst, size.width, out.ptr<uint8_t>(v + r));
+    }
   }
   return out;
 }
@@ -243,7 +251,9 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
   auto t0 = Clock::now();
   cv::Mat recompute;
   if (res->compared) {
-    if (params_.recompute_margin_px > 0) {
+    if (cv::countNonZero(cmp.flagged) == 0) {  // nothing unexpected (most frames): no dilation
+      recompute = cv::Mat::zeros(size, CV_8U);
+    } else if (params_.recompute_margin_px > 0) {
       const int k = 2 * params_.recompute_margin_px + 1;
       cv::dilate(flagged, recompute, cv::getStructuringElement(cv::MORPH_RECT, {k, k}));
     } else {
@@ -262,12 +272,14 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
       // re-measured whether or not E notices (the thing may have left a low-texture place).
       cv::Mat dynamic;
       cv::bitwise_and(pred.flags, cv::Scalar(kDynamic), dynamic);
-      if (params_.recompute_margin_px > 0 && cv::countNonZero(dynamic) > 0) {
-        const int k = 2 * params_.recompute_margin_px + 1;
-        cv::dilate(dynamic, dynamic, cv::getStructuringElement(cv::MORPH_RECT, {k, k}));
+      if (cv::countNonZero(dynamic) > 0) {
+        if (params_.recompute_margin_px > 0) {
+          const int k = 2 * params_.recompute_margin_px + 1;
+          cv::dilate(dynamic, dynamic, cv::getStructuringElement(cv::MORPH_RECT, {k, k}));
+        }
+        recompute.setTo(255, dynamic);
+        uncertain.setTo(255, dynamic);
       }
-      recompute.setTo(255, dynamic);
-      uncertain.setTo(255, dynamic);
     }
     // New content along the borders is recomputed once the strip it forms is thick enough to
     // be worth its SGBM box (the box's padding would dwarf a strip of a pixel or two); until
@@ -343,13 +355,10 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
   t0 = Clock::now();
   if (mode == FrameMode::kPredicted) {
     res->disparity = pred.disparity.clone();
-    cv::Mat expected;
-    if (params_.narrow_search) {
-      expected = pred.geometry.clone();
-      expected.setTo(std::numeric_limits<float>::quiet_NaN(), uncertain);
-    }
+    // Where the geometry is uncertain the search is not narrowed.
     const RoiStereoStats stats =
-        stereo_.ComputeMasked(stereo_left, stereo_right, recompute, res->disparity, expected);
+        stereo_.ComputeMasked(stereo_left, stereo_right, recompute, res->disparity,
+                              params_.narrow_search ? pred.geometry : cv::Mat(), uncertain);
     res->recompute = recompute;
     res->recomputed_share = static_cast<double>(stats.target_pixels) / n_pixels;
     res->stereo_area_share = static_cast<double>(stats.computed_pixels) / n_pixels;
@@ -402,8 +411,11 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
     // No history survives a full restart.
     res->accumulated = cv::Mat::zeros(ComparisonGrid(camera_, step), CV_32F);
   }
-  res->unexpected_share = cv::countNonZero(res->unexpected) / n_pixels;
-  res->regions = LabelRegions(res->unexpected, res->disparity, camera_, T_base_cam0);
+  const int unexpected_pixels = cv::countNonZero(res->unexpected);
+  res->unexpected_share = unexpected_pixels / n_pixels;
+  if (unexpected_pixels > 0) {  // labelling an empty mask still costs a pass over 4-byte labels
+    res->regions = LabelRegions(res->unexpected, res->disparity, camera_, T_base_cam0);
+  }
   res->timings.plan_ms += MsSince(t0);
 
   // The state for the next frame. The result's images are never written again: the next
@@ -428,10 +440,20 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
     for (int v = rows.start; v < rows.end; ++v) {
       auto* p = state_.points.ptr<cv::Vec3f>(v);
       const float* fresh = res->disparity.ptr<float>(v);
-      FillUnknownDisparityRow(fresh, fill.data(), size.width);
+      // The row's fill of SGBM's gaps, made only when a pixel of the row needs it (on predicted
+      // frames most rows have none).
+      bool filled = false;
+      const auto fill_at = [&](int u) {
+        if (!filled) {
+          FillUnknownDisparityRow(fresh, fill.data(), size.width);
+          filled = true;
+        }
+        return fill[static_cast<size_t>(u)];
+      };
       const uint8_t* rec = res->recompute.ptr<uint8_t>(v);
       const uint8_t* moved = res->unexpected.ptr<uint8_t>(v);
       const uint8_t* carried = predicted ? pred.flags.ptr<uint8_t>(v) : nullptr;
+      const uint8_t* hole = predicted ? pred.holes.ptr<uint8_t>(v) : nullptr;
       const uint8_t* later = deferred.empty() ? nullptr : deferred.ptr<uint8_t>(v);
       uint8_t* flags = state_.flags.ptr<uint8_t>(v);
       const float ray_y = static_cast<float>((v - camera_.cy) / camera_.fy);
@@ -446,9 +468,9 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
         flags[u] = f;
         float d;
         if (!predicted || rec[u]) {
-          d = fresh[u] > kMinPointDisparity ? fresh[u] : fill[static_cast<size_t>(u)];
-        } else if (!(p[u][2] > 0) && !(later && later[u])) {
-          d = fill[static_cast<size_t>(u)];
+          d = fresh[u] > kMinPointDisparity ? fresh[u] : fill_at(u);
+        } else if (hole[u] && !(later && later[u])) {  // no predicted point here
+          d = fill_at(u);
         } else {
           continue;  // the predicted point stays
         }

@@ -114,41 +114,67 @@ Comparison Compare(const cv::Mat& predicted, const cv::Mat& valid,
   if (params.compensate_exposure) {
     std::tie(out.gain, out.offset) = FitGainOffset(predicted, valid, actual);
   }
-  cv::Mat actual_f;
-  actual.convertTo(actual_f, CV_32F);
-  cv::Mat compensated;
-  predicted.convertTo(compensated, CV_32F, out.gain, out.offset);
-  // E = |L_- - L| (Sec. IV-A), only where the prediction exists.
-  cv::absdiff(compensated, actual_f, out.error);
-  const cv::Mat invalid = valid == 0;
-  out.error.setTo(0, invalid);
-  // A = E exp(-alpha (C_-)^2) (Sec. IV-A), with the propagated history C_-.
+  // exp(-alpha (C_-)^2), the attenuation of A (Sec. IV-A), by OpenCV's vectorised exp.
   cv::Mat attenuation;
   cv::multiply(predicted_accumulated, predicted_accumulated, attenuation, -params.alpha);
   cv::exp(attenuation, attenuation);
-  cv::multiply(out.error, attenuation, out.attenuated);
-  // Unexpected: A above the threshold (Sec. IV-A), specks removed.
-  const cv::Mat above = out.attenuated > params.threshold_grey;
+  out.error.create(size, CV_32F);
+  out.attenuated.create(size, CV_32F);
+  out.accumulated.create(size, CV_32F);
+  cv::Mat above(size, CV_8U);
+  // One pass for the rest:
+  //   E = |L_- - L| (Sec. IV-A), only where the prediction exists (0 elsewhere);
+  //   A = E exp(-alpha (C_-)^2) (Sec. IV-A), with the propagated history C_-;
+  //   unexpected: A above the threshold (Sec. IV-A), specks removed below;
+  //   C = (E + lambda C_-) / (lambda + 1) (Sec. IV-A); no history where nothing was predicted.
+  //   Every pixel above the threshold (specks included: a speck removed from the output is
+  //   still an unexpected error, not predictable noise) feeds its error with the weight w
+  //   instead: C = (w E + lambda C_-) / (w + lambda) (w = 1: the paper).
+  const float gain = static_cast<float>(out.gain), offset = static_cast<float>(out.offset);
+  const float threshold = static_cast<float>(params.threshold_grey);
+  const double lambda = params.lambda, w = std::min(params.unexpected_weight, 1.0);
+  const float e_new = static_cast<float>(1.0 / (lambda + 1.0));
+  const float c_new = static_cast<float>(lambda / (lambda + 1.0));
+  const float e_unexpected = static_cast<float>(w / (w + lambda));
+  const float c_unexpected = static_cast<float>(lambda / (w + lambda));
+  double sum_error = 0, sum_attenuated = 0;
+  for (int v = 0; v < size.height; ++v) {
+    const float* pred = predicted.ptr<float>(v);
+    const float* hist = predicted_accumulated.ptr<float>(v);
+    const float* att = attenuation.ptr<float>(v);
+    const uint8_t* ok = valid.ptr<uint8_t>(v);
+    const uint8_t* seen = actual.ptr<uint8_t>(v);
+    float* e_row = out.error.ptr<float>(v);
+    float* a_row = out.attenuated.ptr<float>(v);
+    float* c_row = out.accumulated.ptr<float>(v);
+    uint8_t* up = above.ptr<uint8_t>(v);
+    float row_error = 0, row_attenuated = 0;
+    int row_valid = 0;
+    for (int u = 0; u < size.width; ++u) {
+      const bool is_valid = ok[u] != 0;
+      const float e =
+          is_valid ? std::abs(pred[u] * gain + offset - static_cast<float>(seen[u])) : 0;
+      const float a = e * att[u];
+      const bool unexpected = a > threshold;
+      e_row[u] = e;
+      a_row[u] = a;
+      up[u] = unexpected ? 255 : 0;
+      const float c =
+          unexpected ? e * e_unexpected + hist[u] * c_unexpected : e * e_new + hist[u] * c_new;
+      c_row[u] = is_valid ? c : 0.0F;
+      row_error += e;  // 0 where invalid
+      row_attenuated += a;
+      row_valid += is_valid ? 1 : 0;
+    }
+    sum_error += row_error;
+    sum_attenuated += row_attenuated;
+    out.valid_pixels += row_valid;
+  }
   out.flagged =
       RemoveSpecks(above, params.open_radius_px, params.min_region_area_px, params.close_radius_px);
-  // C = (E + lambda C_-) / (lambda + 1) (Sec. IV-A); no history where nothing was predicted.
-  cv::addWeighted(out.error, 1.0 / (params.lambda + 1.0), predicted_accumulated,
-                  params.lambda / (params.lambda + 1.0), 0.0, out.accumulated);
-  out.accumulated.setTo(0, invalid);
-  // Every pixel above the threshold (specks included: a speck removed from the output is still
-  // an unexpected error, not predictable noise) keeps its history unchanged.
-  if (params.unexpected_weight < 1.0) {
-    // C = (w E + lambda C_-) / (w + lambda) where the error is unexpected (w = 1: the paper).
-    cv::Mat weighted;
-    const double w = params.unexpected_weight;
-    cv::addWeighted(out.error, w / (w + params.lambda), predicted_accumulated,
-                    params.lambda / (w + params.lambda), 0.0, weighted);
-    weighted.copyTo(out.accumulated, above);
-  }
-  out.valid_pixels = cv::countNonZero(valid);
   if (out.valid_pixels > 0) {
-    out.mean_error = cv::mean(out.error, valid)[0];
-    out.mean_attenuated = cv::mean(out.attenuated, valid)[0];
+    out.mean_error = sum_error / out.valid_pixels;
+    out.mean_attenuated = sum_attenuated / out.valid_pixels;
   }
   return out;
 }

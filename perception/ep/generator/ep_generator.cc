@@ -129,10 +129,18 @@ void FillCracks(const PredictionParams& params, Splat* s) {
   const int H = s->H, W = s->W;
   std::vector<std::vector<Fill>> fills(static_cast<size_t>(H));
   cv::parallel_for_(cv::Range(1, H - 1), [&](const cv::Range& rows) {
+    std::vector<int> empty(static_cast<size_t>(W));
     for (int v = rows.start; v < rows.end; ++v) {
       const float* d_mid = s->disparity.ptr<float>(v);
+      // The empty pixels of the row, listed without branches first: they lie scattered, and a
+      // branch per pixel was mispredicted at every one of them.
+      int n_empty = 0;
       for (int u = 1; u + 1 < W; ++u) {
-        if (d_mid[u] > 0) continue;
+        empty[static_cast<size_t>(n_empty)] = u;
+        n_empty += d_mid[u] > 0 ? 0 : 1;
+      }
+      for (int e = 0; e < n_empty; ++e) {
+        const int u = empty[static_cast<size_t>(e)];
         float sx = 0, sy = 0, sz = 0, d_min = 1e30F, d_max = -1e30F;
         int n = 0, n_measured = 0;
         uint8_t dynamic = 0;
@@ -182,12 +190,40 @@ void FillSmallHoles(const PredictionParams& params, Splat* s) {
   cv::morphologyEx(holes, large, cv::MORPH_OPEN,
                    cv::getStructuringElement(cv::MORPH_RECT, cv::Size(n + 1, n + 1)));
   cv::Mat small = holes & ~large;
-  // Holes near the border may be the start of a newly visible strip: SGBM's.
+  // Holes near the border may be the start of a newly visible strip: SGBM's. Near the border
+  // (within `margin`), a run is filled only if it is short (at most n), does not reach the left
+  // or right edge, and no pixel of it is joined to the top or bottom edge by a column of holes.
+  // (Excluding every hole near the border cost an SGBM box, padded by the whole search range,
+  // for each crack of a pixel or two along the right edge: ~1-3% of the frame's SGBM work.)
   const int margin = std::min({n + 1, W / 2, H / 2});
-  small(cv::Rect(0, 0, W, margin)).setTo(0);
-  small(cv::Rect(0, H - margin, W, margin)).setTo(0);
-  small(cv::Rect(0, 0, margin, H)).setTo(0);
-  small(cv::Rect(W - margin, 0, margin, H)).setTo(0);
+  // edge_joined row r (r < margin): top rows; row margin + r: the bottom rows, from the bottom.
+  cv::Mat edge_joined(2 * margin, W, CV_8U);
+  for (int r = 0; r < margin; ++r) {
+    const uint8_t* top = holes.ptr<uint8_t>(r);
+    const uint8_t* bottom = holes.ptr<uint8_t>(H - 1 - r);
+    const uint8_t* top_prev = r > 0 ? edge_joined.ptr<uint8_t>(r - 1) : nullptr;
+    const uint8_t* bottom_prev = r > 0 ? edge_joined.ptr<uint8_t>(margin + r - 1) : nullptr;
+    uint8_t* top_out = edge_joined.ptr<uint8_t>(r);
+    uint8_t* bottom_out = edge_joined.ptr<uint8_t>(margin + r);
+    for (int u = 0; u < W; ++u) {
+      top_out[u] = top[u] && (!top_prev || top_prev[u]) ? 1 : 0;
+      bottom_out[u] = bottom[u] && (!bottom_prev || bottom_prev[u]) ? 1 : 0;
+    }
+  }
+  const auto near_border_run_stays = [&](int v, int begin, int end) {
+    const bool near_top = v < margin, near_bottom = v >= H - margin;
+    if (!near_top && !near_bottom && begin >= margin && end <= W - margin) return false;
+    if (end - begin > n || begin == 0 || end == W) return true;
+    const uint8_t* joined = near_top      ? edge_joined.ptr<uint8_t>(v)
+                            : near_bottom ? edge_joined.ptr<uint8_t>(margin + (H - 1 - v))
+                                          : nullptr;
+    if (joined) {
+      for (int i = begin; i < end; ++i) {
+        if (joined[i]) return true;
+      }
+    }
+    return false;
+  };
   for (int v = 0; v < H; ++v) {
     const uint8_t* sm = small.ptr<uint8_t>(v);
     float* disp = s->disparity.ptr<float>(v);
@@ -203,6 +239,7 @@ void FillSmallHoles(const PredictionParams& params, Splat* s) {
       const int begin = u;
       while (u < W && sm[u]) ++u;
       const int end = u;
+      if (near_border_run_stays(v, begin, end)) continue;
       const float d_left = begin > 0 ? disp[begin - 1] : 0.0F;
       const float d_right = end < W ? disp[end] : 0.0F;
       if (!(d_left > 0) && !(d_right > 0)) continue;  // between holes: stays a hole
@@ -226,6 +263,148 @@ void FillSmallHoles(const PredictionParams& params, Splat* s) {
   }
 }
 
+// The moved point that lands on pixel (ui, vi) at sub-pixel offset (du, dv) from its centre.
+struct Landing {
+  int ui, vi;
+  float x, y, z, d, du, dv;
+  uint8_t flags;
+};
+
+// The motion and camera of one prediction, as plain floats (copied into registers by the loops
+// below: through references the compiler would reload them after every store).
+struct SplatMotion {
+  float r[9], t[3];
+  float fx, fy, cx, cy, fb, min_depth, max_step;
+  int W, H;
+};
+
+// Where the points land: one frame's points (3 floats), flags and disparities (0 = empty).
+struct SplatTarget {
+  float* points;
+  uint8_t* flags;
+  float* disparity;
+};
+
+// Writes a point if it beats the pixel's current one: between two surfaces the nearer point,
+// on one surface the point nearer to the pixel centre.
+inline void Land(const SplatMotion& m, const Landing& l, const SplatTarget& t) {
+  const size_t idx =
+      static_cast<size_t>(l.vi) * static_cast<size_t>(m.W) + static_cast<size_t>(l.ui);
+  const float d_old = t.disparity[idx];  // 0 when empty
+  float* dst = t.points + 3 * idx;
+  if (d_old != 0.0F) {
+    if (std::abs(l.d - d_old) > m.max_step) {
+      if (l.d < d_old) return;  // behind the current surface
+    } else {
+      const float inv = 1.0F / dst[2];
+      const float du_old = m.fx * dst[0] * inv + m.cx - static_cast<float>(l.ui);
+      const float dv_old = m.fy * dst[1] * inv + m.cy - static_cast<float>(l.vi);
+      if (l.du * l.du + l.dv * l.dv >= du_old * du_old + dv_old * dv_old) return;
+    }
+  }
+  dst[0] = l.x;
+  dst[1] = l.y;
+  dst[2] = l.z;
+  t.flags[idx] = l.flags;
+  t.disparity[idx] = l.d;
+}
+
+// One row of moved points, projected: coordinates in the new camera frame, disparity, and the
+// sub-pixel position in the new image (u = -1 where the point does not land: none, behind the
+// camera, outside the image). Kept apart from the landing, which is sequential, so that this
+// loop vectorises.
+struct RowProjection {
+  std::vector<float> px, py, pz, x, y, z, d, u, v;
+  explicit RowProjection(int width)
+      : px(static_cast<size_t>(width)),
+        py(px.size()),
+        pz(px.size()),
+        x(px.size()),
+        y(px.size()),
+        z(px.size()),
+        d(px.size()),
+        u(px.size()),
+        v(px.size()) {}
+
+  void Project(const float* points, const SplatMotion& m) {
+    const int n = static_cast<int>(px.size());
+    for (int i = 0; i < n; ++i) {  // one array per coordinate
+      px[static_cast<size_t>(i)] = points[3 * i];
+      py[static_cast<size_t>(i)] = points[3 * i + 1];
+      pz[static_cast<size_t>(i)] = points[3 * i + 2];
+    }
+    ProjectArrays(n, m, px.data(), py.data(), pz.data(), x.data(), y.data(), z.data(), d.data(),
+                  u.data(), v.data());
+  }
+
+  // __restrict: the arrays never overlap (without it the compiler must assume they might and
+  // gives up vectorising).
+  static void ProjectArrays(int n, const SplatMotion& m, const float* __restrict px,
+                            const float* __restrict py, const float* __restrict pz,
+                            float* __restrict xs, float* __restrict ys, float* __restrict zs,
+                            float* __restrict ds, float* __restrict us, float* __restrict vs) {
+    const float r00 = m.r[0], r01 = m.r[1], r02 = m.r[2];
+    const float r10 = m.r[3], r11 = m.r[4], r12 = m.r[5];
+    const float r20 = m.r[6], r21 = m.r[7], r22 = m.r[8];
+    const float tx = m.t[0], ty = m.t[1], tz = m.t[2];
+    const float fx = m.fx, fy = m.fy, cx = m.cx, cy = m.cy, fb = m.fb, min_depth = m.min_depth;
+    const float u_max = static_cast<float>(m.W) - 0.5F, v_max = static_cast<float>(m.H) - 0.5F;
+    constexpr float kInf = std::numeric_limits<float>::infinity();
+    for (int i = 0; i < n; ++i) {
+      const float x = r00 * px[i] + r01 * py[i] + r02 * pz[i] + tx;
+      const float y = r10 * px[i] + r11 * py[i] + r12 * pz[i] + ty;
+      const float z = r20 * px[i] + r21 * py[i] + r22 * pz[i] + tz;
+      const float inv_z = 1.0F / z;
+      const float u1 = fx * x * inv_z + cx, v1 = fy * y * inv_z + cy;
+      // No point here (NaN), behind the new camera, or outside the image (all comparisons are
+      // false for NaN; an infinite coordinate fails one of them too); & rather than &&: no
+      // branches in the loop.
+      const bool ok = (pz[i] > 0) & (pz[i] < kInf) & (z > min_depth) & (u1 > -0.5F) & (v1 > -0.5F) &
+                      (u1 < u_max) & (v1 < v_max);
+      xs[i] = x;
+      ys[i] = y;
+      zs[i] = z;
+      ds[i] = fb * inv_z;
+      us[i] = ok ? u1 : -1.0F;
+      vs[i] = ok ? v1 : 0.0F;
+    }
+  }
+};
+
+// Moves the points of rows [row_begin, row_end) of the previous map and lands those whose
+// pixel lies in the same rows; the others are returned in `crossers` (another thread owns
+// their rows). Per row, the projection runs first over the whole row into small arrays (a loop
+// the compiler vectorises), then the landings, which depend on each other, one by one.
+void SplatRows(const MapState& previous, const SplatMotion& motion, int row_begin, int row_end,
+               const SplatTarget& target, std::vector<Landing>* crossers) {
+  const int W = motion.W;
+  RowProjection row(W);
+  for (int v = row_begin; v < row_end; ++v) {
+    const uint8_t* m = previous.flags.ptr<uint8_t>(v);
+    row.Project(previous.points.ptr<float>(v), motion);
+    const float *xs = row.x.data(), *ys = row.y.data(), *zs = row.z.data(), *ds = row.d.data();
+    const float *us = row.u.data(), *vs = row.v.data();
+    for (int u = 0; u < W; ++u) {
+      const float u1 = us[u], v1 = vs[u];
+      if (u1 == -1.0F) continue;
+      const int ui = static_cast<int>(u1 + 0.5F), vi = static_cast<int>(v1 + 0.5F);
+      const Landing l{ui,
+                      vi,
+                      xs[u],
+                      ys[u],
+                      zs[u],
+                      ds[u],
+                      u1 - static_cast<float>(ui),
+                      v1 - static_cast<float>(vi),
+                      m[u]};
+      if (vi >= row_begin && vi < row_end) {
+        Land(motion, l, target);
+      } else {
+        crossers->push_back(l);
+      }
+    }
+  }
+}
 }  // namespace
 
 void PredictionParams::Validate() const {
@@ -313,82 +492,34 @@ Prediction Predict(const MapState& previous, const Eigen::Isometry3d& T_cur_prev
   mem.flags.create(H, W, CV_8U);
   mem.splat_disparity.create(H, W, CV_32F);
   s.points = points_buffer;
-  s.flags = mem.flags;
-  s.flags.setTo(0);
+  s.flags = mem.flags;  // read only where a point landed; cleared at holes below
   s.disparity = mem.splat_disparity;
   s.disparity.setTo(0);
-  float* dst_points = s.points.ptr<float>(0);  // all freshly allocated: continuous
-  uint8_t* dst_flags = s.flags.ptr<uint8_t>(0);
-  float* dst_disp = s.disparity.ptr<float>(0);
-  struct Landing {
-    int ui, vi;
-    float x, y, z, d, du, dv;
-    uint8_t flags;
-  };
-  // Writes a point if it beats the pixel's current one (see above).
-  const auto land = [&](const Landing& l) {
-    const size_t idx =
-        static_cast<size_t>(l.vi) * static_cast<size_t>(W) + static_cast<size_t>(l.ui);
-    const float d_old = dst_disp[idx];  // 0 when empty
-    float* dst = dst_points + 3 * idx;
-    if (d_old != 0.0F) {
-      if (std::abs(l.d - d_old) > max_step) {
-        if (l.d < d_old) return;  // behind the current surface
-      } else {                    // one surface: the point nearer to the pixel centre stays
-        const float inv = 1.0F / dst[2];
-        const float du_old = fx * dst[0] * inv + cx - static_cast<float>(l.ui);
-        const float dv_old = fy * dst[1] * inv + cy - static_cast<float>(l.vi);
-        if (l.du * l.du + l.dv * l.dv >= du_old * du_old + dv_old * dv_old) return;
-      }
-    }
-    dst[0] = l.x;
-    dst[1] = l.y;
-    dst[2] = l.z;
-    dst_flags[idx] = l.flags;
-    dst_disp[idx] = l.d;
-  };
+  SplatTarget target;
+  target.points = s.points.ptr<float>(0);  // all allocated whole: continuous
+  target.flags = s.flags.ptr<uint8_t>(0);
+  target.disparity = s.disparity.ptr<float>(0);
+  const SplatMotion motion{{r00, r01, r02, r10, r11, r12, r20, r21, r22},
+                           {tx, ty, tz},
+                           fx,
+                           fy,
+                           cx,
+                           cy,
+                           fb,
+                           min_depth,
+                           max_step,
+                           W,
+                           H};
   const int halves = H >= 64 ? 2 : 1;
   std::vector<std::vector<Landing>> crossing(static_cast<size_t>(halves));
   cv::parallel_for_(cv::Range(0, halves), [&](const cv::Range& range) {
     for (int half = range.start; half < range.end; ++half) {
-      const int row_begin = half * H / halves, row_end = (half + 1) * H / halves;
-      auto& crossers = crossing[static_cast<size_t>(half)];
-      for (int v = row_begin; v < row_end; ++v) {
-        const float* src = previous.points.ptr<float>(v);
-        const uint8_t* m = previous.flags.ptr<uint8_t>(v);
-        for (int u = 0; u < W; ++u, src += 3) {
-          // No point here (NaN), or a broken one (an infinite x or y is caught below).
-          const float px = src[0], py = src[1], pz = src[2];
-          if (!(pz > 0) || !std::isfinite(pz)) continue;
-          const float x = r00 * px + r01 * py + r02 * pz + tx;
-          const float y = r10 * px + r11 * py + r12 * pz + ty;
-          const float z = r20 * px + r21 * py + r22 * pz + tz;
-          if (!(z > min_depth)) continue;  // behind the new camera (or NaN)
-          const float inv_z = 1.0F / z;
-          const float u1 = fx * x * inv_z + cx, v1 = fy * y * inv_z + cy;
-          // Outside the image (the comparisons are false for NaN and infinities, too).
-          if (!(u1 > -0.5F && v1 > -0.5F && u1 < W - 0.5F && v1 < H - 0.5F)) continue;
-          const int ui = static_cast<int>(u1 + 0.5F), vi = static_cast<int>(v1 + 0.5F);
-          const Landing l{ui,
-                          vi,
-                          x,
-                          y,
-                          z,
-                          fb * inv_z,
-                          u1 - static_cast<float>(ui),
-                          v1 - static_cast<float>(vi),
-                          m[u]};
-          if (vi >= row_begin && vi < row_end) {
-            land(l);
-          } else {
-            crossers.push_back(l);
-          }
-        }
-      }
+      SplatRows(previous, motion, half * H / halves, (half + 1) * H / halves, target,
+                &crossing[static_cast<size_t>(half)]);
     }
   });
   for (const auto& crossers : crossing) {
-    for (const Landing& l : crossers) land(l);
+    for (const Landing& l : crossers) Land(motion, l, target);
   }
   // ... and an empty pixel takes the best point held by a neighbour whose projection lies
   // within splat_radius_px of its own centre (a footprint of 1.5 px).
@@ -414,10 +545,11 @@ Prediction Predict(const MapState& previous, const Eigen::Isometry3d& T_cur_prev
       uint8_t* flags = s.flags.ptr<uint8_t>(v);
       uint8_t* hole = out.holes.ptr<uint8_t>(v);
       for (int u = 0; u < W; ++u) {
-        float* p = pts + 3 * u;
+        // A point is only ever written (Land, Splat::Set) with finite coordinates and its
+        // disparity fb / z; one that overflowed has d = 0 or a non-finite d, so checking d
+        // suffices (the points themselves, 12 bytes a pixel, are not read again here).
         const float d = d_splat[u];
-        const bool ok = d > 0 && std::isfinite(d) && std::isfinite(p[0]) && std::isfinite(p[1]) &&
-                        std::isfinite(p[2]);
+        const bool ok = d > 0 && d < std::numeric_limits<float>::infinity();
         if (ok) {
           geo[u] = d;
           disp[u] = (flags[u] & kMeasured) ? d : kNaN;
@@ -428,6 +560,7 @@ Prediction Predict(const MapState& previous, const Eigen::Isometry3d& T_cur_prev
           disp[u] = kNaN;
           hole[u] = 255;
           flags[u] = 0;
+          float* p = pts + 3 * u;
           p[0] = p[1] = p[2] = kNaN;
         }
       }
@@ -442,57 +575,76 @@ Prediction Predict(const MapState& previous, const Eigen::Isometry3d& T_cur_prev
   //    its pixel centres (u, v) = step * (i, j) is back-projected at its point's depth,
   //    X' = z ray(u, v), moved back into frame k, X = R^T (X' - t), and projected there:
   //    q = pi(X). L^k is sampled at q (full resolution), C^k at q / step.
+  //    Both are interpolated bilinearly here, in the same pass (L^k as 8-bit, C^k with its edge
+  //    replicated); a non-finite C^k value would spread through the sample, so such samples are
+  //    0 (no history).
   const int step = params.image_step;
   const cv::Size grid = ComparisonGrid(camera, step);
-  for (cv::Mat* m : {&mem.map_x, &mem.map_y, &mem.grid_x, &mem.grid_y}) m->create(grid, CV_32F);
-  cv::Mat &map_x = mem.map_x, &map_y = mem.map_y, &grid_x = mem.grid_x, &grid_y = mem.grid_y;
+  out.image.create(grid, CV_32F);
+  out.accumulated.create(grid, CV_32F);
   out.image_valid.create(grid, CV_8U);
   const float inv_step = 1.0F / static_cast<float>(step);
+  const float inv_fx = 1.0F / fx;
+  const cv::Mat& image_k = previous.image;
+  const cv::Mat& history_k = previous.accumulated;
   cv::parallel_for_(cv::Range(0, grid.height), [&](const cv::Range& rows) {
+    // Local copies: through the captured references they would be reloaded after every store.
+    const float fx_ = fx, fy_ = fy, cx_ = cx, cy_ = cy, fb_ = fb, min_depth_ = min_depth;
+    const float w_last = static_cast<float>(W - 1), h_last = static_cast<float>(H - 1);
+    const int grid_w_last = grid.width - 1, grid_h_last = grid.height - 1;
     for (int i = rows.start; i < rows.end; ++i) {
       const int v = i * step;
-      const float* pts = s.points.ptr<float>(v);
-      float* mx = map_x.ptr<float>(i);
-      float* my = map_y.ptr<float>(i);
-      float* gx = grid_x.ptr<float>(i);
-      float* gy = grid_y.ptr<float>(i);
+      const float* geo = out.geometry.ptr<float>(v);  // NaN at holes
+      float* lum = out.image.ptr<float>(i);
+      float* acc = out.accumulated.ptr<float>(i);
       uint8_t* valid = out.image_valid.ptr<uint8_t>(i);
-      const float ray_y = (static_cast<float>(v) - cy) / fy;
+      const float ray_y = (static_cast<float>(v) - cy_) / fy_;
       for (int j = 0; j < grid.width; ++j) {
         const int u = j * step;
-        const float z = pts[3 * u + 2];
+        // The point's depth, from its disparity (4 bytes a pixel to read, not 12).
+        const float z = fb_ / geo[u];
         valid[j] = 0;
-        mx[j] = my[j] = gx[j] = gy[j] = -1.0F;
-        if (!(z > min_depth)) continue;  // a hole (NaN) or degenerate
+        lum[j] = 0.0F;
+        acc[j] = 0.0F;
+        if (!(z > min_depth_)) continue;  // a hole (NaN) or degenerate
         // X' - t, then R^T.
-        const float ax = (static_cast<float>(u) - cx) / fx * z - tx;
+        const float ax = (static_cast<float>(u) - cx_) * inv_fx * z - tx;
         const float ay = ray_y * z - ty;
         const float az = z - tz;
         const float x = r00 * ax + r10 * ay + r20 * az;
         const float y = r01 * ax + r11 * ay + r21 * az;
         const float zk = r02 * ax + r12 * ay + r22 * az;
-        const float qx = fx * x / zk + cx, qy = fy * y / zk + cy;
+        const float inv_zk = 1.0F / zk;
+        const float qx = fx_ * x * inv_zk + cx_, qy = fy_ * y * inv_zk + cy_;
         // Inside frame k (false for NaN): else nothing to sample.
-        if (!(zk > min_depth && qx >= 0 && qy >= 0 && qx <= static_cast<float>(W - 1) &&
-              qy <= static_cast<float>(H - 1))) {
-          continue;
-        }
-        mx[j] = qx;
-        my[j] = qy;
-        gx[j] = qx * inv_step;
-        gy[j] = qy * inv_step;
+        if (!(zk > min_depth_ && qx >= 0 && qy >= 0 && qx <= w_last && qy <= h_last)) continue;
         valid[j] = 255;
+        {  // L^k at q
+          const int x0 = static_cast<int>(qx), y0 = static_cast<int>(qy);
+          const int x1 = std::min(x0 + 1, W - 1), y1 = std::min(y0 + 1, H - 1);
+          const float a = qx - static_cast<float>(x0), b = qy - static_cast<float>(y0);
+          const uint8_t* r0 = image_k.ptr<uint8_t>(y0);
+          const uint8_t* r1 = image_k.ptr<uint8_t>(y1);
+          const float top = static_cast<float>(r0[x0]) + a * static_cast<float>(r0[x1] - r0[x0]);
+          const float bottom = static_cast<float>(r1[x0]) + a * static_cast<float>(r1[x1] - r1[x0]);
+          lum[j] = top + b * (bottom - top);
+        }
+        {  // C^k at q / step
+          const float gx = qx * inv_step, gy = qy * inv_step;
+          const int x0 = std::min(static_cast<int>(gx), grid_w_last);
+          const int y0 = std::min(static_cast<int>(gy), grid_h_last);
+          const int x1 = std::min(x0 + 1, grid_w_last), y1 = std::min(y0 + 1, grid_h_last);
+          const float a = gx - static_cast<float>(x0), b = gy - static_cast<float>(y0);
+          const float* r0 = history_k.ptr<float>(y0);
+          const float* r1 = history_k.ptr<float>(y1);
+          const float top = r0[x0] * (1.0F - a) + r0[x1] * a;
+          const float bottom = r1[x0] * (1.0F - a) + r1[x1] * a;
+          const float c = top * (1.0F - b) + bottom * b;
+          acc[j] = std::isfinite(c) ? c : 0.0F;
+        }
       }
     }
   });
-  cv::Mat& image_k = mem.image;
-  previous.image.convertTo(image_k, CV_32F);  // interpolate in float: no rounding of L_-
-  cv::remap(image_k, out.image, map_x, map_y, cv::INTER_LINEAR, cv::BORDER_CONSTANT, 0);
-  cv::remap(previous.accumulated, out.accumulated, grid_x, grid_y, cv::INTER_LINEAR,
-            cv::BORDER_REPLICATE);
-  out.accumulated.setTo(0, out.image_valid == 0);
-  // A non-finite C^k value would spread through the bilinear sample: never let it through.
-  cv::patchNaNs(out.accumulated, 0.0);
   return out;
 }
 

@@ -92,7 +92,6 @@ struct Prediction {
 // the next one is written). Give one scratch to one pipeline; never publish what lives in it.
 struct PredictionScratch {
   cv::Mat points[2], flags, splat_disparity, disparity, geometry;
-  cv::Mat map_x, map_y, grid_x, grid_y, image;
 };
 
 // T_cur_prev maps points of the previous camera frame into the current one

@@ -64,6 +64,7 @@ std::vector<RoiBox> RoiStereo::PlanBoxes(const cv::Mat& mask) const {
   cv::Mat labels, stats, centroids;
   for (int y0 = 0; y0 < mask.rows; y0 += params_.band_rows) {
     const cv::Rect band(0, y0, mask.cols, std::min(params_.band_rows, mask.rows - y0));
+    if (cv::countNonZero(mask(band)) == 0) continue;  // most bands: labelling costs far more
     const int n = cv::connectedComponentsWithStats(mask(band), labels, stats, centroids, 8, CV_32S);
     for (int i = 1; i < n; ++i) {
       const cv::Rect target(
@@ -97,7 +98,7 @@ std::vector<RoiBox> RoiStereo::PlanBoxes(const cv::Mat& mask) const {
 
 RoiStereoStats RoiStereo::ComputeMasked(const cv::Mat& left, const cv::Mat& right,
                                         const cv::Mat& mask, cv::Mat& disparity,
-                                        const cv::Mat& expected) {
+                                        const cv::Mat& expected, const cv::Mat& expected_unknown) {
   if (left.size() != right.size() || left.type() != right.type()) {
     throw std::invalid_argument("ROI stereo: left and right differ in size or type");
   }
@@ -108,6 +109,10 @@ RoiStereoStats RoiStereo::ComputeMasked(const cv::Mat& left, const cv::Mat& righ
   if (!expected.empty() && (expected.type() != CV_32FC1 || expected.size() != left.size())) {
     throw std::invalid_argument(
         "ROI stereo: expected disparity must be CV_32F of the images' size");
+  }
+  if (!expected_unknown.empty() &&
+      (expected_unknown.type() != CV_8UC1 || expected_unknown.size() != left.size())) {
+    throw std::invalid_argument("ROI stereo: expected_unknown must be CV_8U of the images' size");
   }
   RoiStereoStats stats;
   stats.plan = PlanBoxes(mask);
@@ -124,9 +129,11 @@ RoiStereoStats RoiStereo::ComputeMasked(const cv::Mat& left, const cv::Mat& righ
       for (int v = box.target.y; v < box.target.y + box.target.height; ++v) {
         const uint8_t* m = mask.ptr<uint8_t>(v);
         const float* e = expected.ptr<float>(v);
+        const uint8_t* unknown =
+            expected_unknown.empty() ? nullptr : expected_unknown.ptr<uint8_t>(v);
         for (int u = box.target.x; u < box.target.x + box.target.width; ++u) {
           if (!m[u]) continue;
-          if (!std::isfinite(e[u])) {
+          if (!std::isfinite(e[u]) || (unknown && unknown[u])) {
             ++without;
             continue;
           }

@@ -23,15 +23,19 @@
 namespace epmap::ep {
 
 struct RoiStereoParams {
-  int context_px = 4;  // beyond half a block, on every side
+  // Beyond half a block, on every side. Measured on the head scenario (300 frames): 2 instead
+  // of 4 saves ~7% of the SGBM work for +0.06 points of bad-2 and -0.003 IoU.
+  int context_px = 2;
   int band_rows = 24;  // height of the bands the mask is cut into before merging
   // Boxes are merged when area(union) <= merge_slack * (area(a) + area(b)).
   double merge_slack = 1.0;
   // When the caller knows roughly what disparity to expect in a box, SGBM searches only
   // [min - margin, max + margin] there (margin = range_margin_px + range_margin_share * max),
   // rounded to SGBM's steps of 16: cost and left padding both scale with the search range.
-  double range_margin_px = 6.0;
-  double range_margin_share = 0.25;
+  // Measured on the head scenario: 3 px + 10% instead of 6 px + 25% saves ~7% of the SGBM work
+  // with bad-2 unchanged (0.1417 vs 0.1419); 2 px + 5% saves ~2% more.
+  double range_margin_px = 3.0;
+  double range_margin_share = 0.1;
   // ... as long as at most this share of the box's target pixels has no expectation.
   double range_unknown_share = 0.1;
 
@@ -67,8 +71,11 @@ class RoiStereo {
   // `expected` (optional, CV_32F, NaN = unknown) narrows each box's search range when (nearly)
   // all its target pixels have an expectation ("over the disparity range it needs"); other
   // boxes search the full range.
+  // `expected_unknown` (optional, CV_8U): non-zero where `expected` is to be treated as unknown
+  // (saves the caller a masked copy of `expected`).
   RoiStereoStats ComputeMasked(const cv::Mat& left, const cv::Mat& right, const cv::Mat& mask,
-                               cv::Mat& disparity, const cv::Mat& expected = cv::Mat());
+                               cv::Mat& disparity, const cv::Mat& expected = cv::Mat(),
+                               const cv::Mat& expected_unknown = cv::Mat());
 
   // The padded boxes SGBM would run on for `mask` (exposed for tests and the benchmark).
   std::vector<RoiBox> PlanBoxes(const cv::Mat& mask) const;
