@@ -32,6 +32,11 @@ function(epmap_test name)
   target_include_directories(${name} PRIVATE ${PROJECT_SOURCE_DIR})
   target_link_libraries(${name} PRIVATE ${ARG_DEPS} GTest::gtest GTest::gtest_main)
   set_target_properties(${name} PROPERTIES RUNTIME_OUTPUT_DIRECTORY ${CMAKE_BINARY_DIR}/tests)
+  # The same places as CTest's environment below, for a test binary run by hand.
+  target_compile_definitions(${name} PRIVATE
+    EPMAP_DEFAULT_BIN_DIR="${CMAKE_BINARY_DIR}/bin"
+    EPMAP_DEFAULT_SOURCE_DIR="${PROJECT_SOURCE_DIR}"
+    EPMAP_DEFAULT_SHARED_DIR="${PROJECT_SOURCE_DIR}/../shared")
   epmap_strict(${name})
   if(NOT ARG_TIMEOUT)
     set(ARG_TIMEOUT 120)

@@ -1,6 +1,7 @@
 #pragma once
 // Where tests find things: the build's binaries, the source tree and ../shared/data.
-// CTest sets EPMAP_BIN_DIR, EPMAP_SOURCE_DIR and EPMAP_SHARED_DIR (see cmake/EpmapTargets.cmake).
+// CTest sets EPMAP_BIN_DIR, EPMAP_SOURCE_DIR and EPMAP_SHARED_DIR (see cmake/EpmapTargets.cmake);
+// a test binary run by hand falls back to the same places, compiled in by epmap_test.
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -8,6 +9,12 @@
 #include <cstdlib>
 #include <filesystem>
 #include <string>
+
+#ifndef EPMAP_DEFAULT_BIN_DIR
+#define EPMAP_DEFAULT_BIN_DIR "build/bin"
+#define EPMAP_DEFAULT_SOURCE_DIR "."
+#define EPMAP_DEFAULT_SHARED_DIR "../shared"
+#endif
 
 namespace epmap::testing {
 
@@ -17,13 +24,13 @@ inline std::filesystem::path EnvPath(const char* name, const char* fallback) {
 }
 
 inline std::filesystem::path BinDir() {
-  return EnvPath("EPMAP_BIN_DIR", "build/bin");
+  return EnvPath("EPMAP_BIN_DIR", EPMAP_DEFAULT_BIN_DIR);
 }
 inline std::filesystem::path SourceDir() {
-  return EnvPath("EPMAP_SOURCE_DIR", ".");
+  return EnvPath("EPMAP_SOURCE_DIR", EPMAP_DEFAULT_SOURCE_DIR);
 }
 inline std::filesystem::path SharedDataDir() {
-  return EnvPath("EPMAP_SHARED_DIR", "../shared") / "data";
+  return EnvPath("EPMAP_SHARED_DIR", EPMAP_DEFAULT_SHARED_DIR) / "data";
 }
 
 // A DDS domain id of this test process's own (0..232), so parallel CTest runs never cross.
