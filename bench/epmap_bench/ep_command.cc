@@ -278,6 +278,9 @@ struct PassResult {
   std::vector<double> ep_ms, full_ms, ratio, share, stereo_area;
   std::vector<double> ep_cpu_ms, full_cpu_ms, cpu_ratio;
   std::vector<double> mean_e, mean_a, mean_e_settled, mean_a_settled;
+  // Settled sums of E and A split by the true unexpected mask: the static scene's residual
+  // (what C should learn to attenuate) and the moving object's (what must stay bright).
+  double static_e_sum = 0, static_a_sum = 0, moving_e_sum = 0, moving_a_sum = 0;
   std::vector<double> iou, flagged_not_visible;
   std::vector<double> predict_ms, compare_ms, plan_ms, stereo_ms, fuse_ms;
   epmap::stereo::DisparityScore ep_all, ep_first, ep_last, full_all, full_first, full_last;
@@ -357,6 +360,18 @@ std::vector<PassResult> RunPasses(const Dataset& d, const Rig& rig,
         if (static_cast<int>(i) >= settle) {
           r.mean_e_settled.push_back(e.mean_error);
           r.mean_a_settled.push_back(e.mean_attenuated);
+          if (!f.gt_unexpected.empty() && !e.error.empty()) {
+            // E and A are 0 where nothing was predicted, so sums compare like with like.
+            cv::Mat moving;
+            cv::resize(f.gt_unexpected, moving, e.error.size(), 0, 0, cv::INTER_NEAREST);
+            cv::Mat weight_moving;  // 1 on the moving object, 0 elsewhere
+            cv::Mat(moving > 0).convertTo(weight_moving, CV_32F, 1.0 / 255);
+            const cv::Mat weight_still = 1.0 - weight_moving;
+            r.static_e_sum += e.error.dot(weight_still);
+            r.static_a_sum += e.attenuated.dot(weight_still);
+            r.moving_e_sum += e.error.dot(weight_moving);
+            r.moving_a_sum += e.attenuated.dot(weight_moving);
+          }
         }
       }
       if (!f.gt_disparity.empty()) {
@@ -428,6 +443,12 @@ void Summarise(const PassResult& r, int settle, Json* j) {
   j->Num("mean_E_settled", Mean(r.mean_e_settled));
   j->Num("mean_A_settled", Mean(r.mean_a_settled));
   j->Num("A_over_E_settled", Mean(r.mean_a_settled) / Mean(r.mean_e_settled));
+  if (r.static_e_sum > 0) {
+    j->Num("A_over_E_settled_static", r.static_a_sum / r.static_e_sum);
+  }
+  if (r.moving_e_sum > 0) {
+    j->Num("A_over_E_settled_moving", r.moving_a_sum / r.moving_e_sum);
+  }
   Json stages;
   stages.Num("predict", Median(r.predict_ms))
       .Num("compare", Median(r.compare_ms))
