@@ -45,6 +45,7 @@ std::vector<std::pair<std::string, Field>> Fields(EpParams* p) {
       {"sgbm.mode", &p->sgbm.mode},
       {"roi.context_px", &p->roi.context_px},
       {"roi.band_rows", &p->roi.band_rows},
+      {"roi.split_width_px", &p->roi.split_width_px},
       {"roi.merge_slack", &p->roi.merge_slack},
       {"refresh.every_n_frames", &p->refresh.every_n_frames},
       {"refresh.max_recompute_share", &p->refresh.max_recompute_share},

@@ -12,6 +12,7 @@ void RoiStereoParams::Validate() const {
   if (context_px < 0) throw std::invalid_argument("ROI stereo: context_px must be >= 0");
   if (!(merge_slack >= 1.0)) throw std::invalid_argument("ROI stereo: merge_slack must be >= 1");
   if (band_rows < 1) throw std::invalid_argument("ROI stereo: band_rows must be >= 1");
+  if (split_width_px < 0) throw std::invalid_argument("ROI stereo: split_width_px must be >= 0");
 }
 
 RoiStereo::RoiStereo(const stereo::SgbmParams& sgbm, const RoiStereoParams& params)
@@ -120,54 +121,82 @@ RoiStereoStats RoiStereo::ComputeMasked(const cv::Mat& left, const cv::Mat& righ
   stats.target_pixels = cv::countNonZero(mask);
   const int full_min = sgbm_.min_disparity, full_num = sgbm_.num_disparities;
   const int half = sgbm_.block_size / 2 + params_.context_px;
-  for (const RoiBox& box : stats.plan) {
-    int min_d = full_min, num_d = full_num;
-    if (!expected.empty()) {
-      // The range the box's target pixels need, if (nearly) all of them have an expectation.
-      float lo = std::numeric_limits<float>::max(), hi = std::numeric_limits<float>::lowest();
-      long long with = 0, without = 0;
-      for (int v = box.target.y; v < box.target.y + box.target.height; ++v) {
-        const uint8_t* m = mask.ptr<uint8_t>(v);
-        const float* e = expected.ptr<float>(v);
-        const uint8_t* unknown =
-            expected_unknown.empty() ? nullptr : expected_unknown.ptr<uint8_t>(v);
-        for (int u = box.target.x; u < box.target.x + box.target.width; ++u) {
-          if (!m[u]) continue;
-          if (!std::isfinite(e[u]) || (unknown && unknown[u])) {
-            ++without;
-            continue;
-          }
-          ++with;
-          lo = std::min(lo, e[u]);
-          hi = std::max(hi, e[u]);
+  struct Search {
+    int min_d, num_d;
+    bool narrowed;
+  };
+  // The range the target's mask pixels need, if (nearly) all of them have an expectation.
+  const auto search_for = [&](const cv::Rect& target) {
+    Search s{full_min, full_num, false};
+    if (expected.empty()) return s;
+    float lo = std::numeric_limits<float>::max(), hi = std::numeric_limits<float>::lowest();
+    long long with = 0, without = 0;
+    for (int v = target.y; v < target.y + target.height; ++v) {
+      const uint8_t* m = mask.ptr<uint8_t>(v);
+      const float* e = expected.ptr<float>(v);
+      const uint8_t* unknown =
+          expected_unknown.empty() ? nullptr : expected_unknown.ptr<uint8_t>(v);
+      for (int u = target.x; u < target.x + target.width; ++u) {
+        if (!m[u]) continue;
+        if (!std::isfinite(e[u]) || (unknown && unknown[u])) {
+          ++without;
+          continue;
         }
-      }
-      const bool known =
-          with > 0 && static_cast<double>(without) <=
-                          params_.range_unknown_share * static_cast<double>(with + without);
-      if (known && hi >= lo) {
-        const double margin = params_.range_margin_px + params_.range_margin_share * hi;
-        const int lo_d = std::max(full_min, static_cast<int>(std::floor(lo - margin)));
-        const int hi_d = static_cast<int>(std::ceil(hi + margin));
-        const int num = (hi_d - lo_d + 1 + 15) / 16 * 16;
-        if (lo_d + num <= full_min + full_num && num < full_num) {
-          min_d = lo_d;
-          num_d = num;
-          ++stats.narrowed_boxes;
-        }
+        ++with;
+        lo = std::min(lo, e[u]);
+        hi = std::max(hi, e[u]);
       }
     }
-    // The padding to the left needs only this box's search range.
-    cv::Rect padded = box.padded;
-    const int left_edge = std::max(0, box.target.x - half - (min_d + num_d));
-    padded.width -= left_edge - padded.x;
-    padded.x = left_edge;
-    stats.computed_pixels += static_cast<long long>(padded.area()) * num_d / full_num;
-    const cv::Mat fresh = Match(left(padded), right(padded), min_d, num_d);
-    // Only the box's own mask pixels, which have the full padding around them.
-    const cv::Rect in_box(box.target.x - padded.x, box.target.y - padded.y, box.target.width,
-                          box.target.height);
-    fresh(in_box).copyTo(disparity(box.target), mask(box.target));
+    const bool known =
+        with > 0 && static_cast<double>(without) <=
+                        params_.range_unknown_share * static_cast<double>(with + without);
+    if (known && hi >= lo) {
+      const double margin = params_.range_margin_px + params_.range_margin_share * hi;
+      const int lo_d = std::max(full_min, static_cast<int>(std::floor(lo - margin)));
+      const int hi_d = static_cast<int>(std::ceil(hi + margin));
+      const int num = (hi_d - lo_d + 1 + 15) / 16 * 16;
+      if (lo_d + num <= full_min + full_num && num < full_num) s = {lo_d, num, true};
+    }
+    return s;
+  };
+  // The box SGBM runs on for a target: `rows` (the planned padding's rows), and to the left only
+  // this search's range.
+  const int image_width = left.cols;
+  const auto padded_for = [&](const cv::Rect& target, const cv::Rect& rows, const Search& s) {
+    const int x0 = std::max(0, target.x - half - (s.min_d + s.num_d));
+    const int x1 = std::min(image_width, target.x + target.width + half);
+    return cv::Rect(x0, rows.y, x1 - x0, rows.height);
+  };
+  const auto cost = [&](const cv::Rect& padded, const Search& s) {
+    return static_cast<long long>(padded.area()) * s.num_d;
+  };
+  for (const RoiBox& box : stats.plan) {
+    const Search whole = search_for(box.target);
+    std::vector<std::pair<cv::Rect, Search>> runs{{box.target, whole}};
+    const int split = params_.split_width_px;
+    if (split > 0 && !expected.empty() && box.target.width >= 2 * split) {
+      const int n = (box.target.width + split / 2) / split;
+      std::vector<std::pair<cv::Rect, Search>> pieces;
+      long long pieces_cost = 0;
+      for (int k = 0; k < n; ++k) {
+        const int x0 = box.target.x + box.target.width * k / n;
+        const int x1 = box.target.x + box.target.width * (k + 1) / n;
+        const cv::Rect piece(x0, box.target.y, x1 - x0, box.target.height);
+        const Search s = search_for(piece);
+        pieces_cost += cost(padded_for(piece, box.padded, s), s);
+        pieces.emplace_back(piece, s);
+      }
+      if (pieces_cost < cost(padded_for(box.target, box.padded, whole), whole)) runs = pieces;
+    }
+    for (const auto& [target, search] : runs) {
+      const cv::Rect padded = padded_for(target, box.padded, search);
+      if (search.narrowed) ++stats.narrowed_boxes;
+      stats.computed_pixels += static_cast<long long>(padded.area()) * search.num_d / full_num;
+      const cv::Mat fresh = Match(left(padded), right(padded), search.min_d, search.num_d);
+      // Only the target's own mask pixels, which have the full padding around them.
+      const cv::Rect in_box(target.x - padded.x, target.y - padded.y, target.width, target.height);
+      fresh(in_box).copyTo(disparity(target), mask(target));
+    }
   }
   return stats;
 }

@@ -38,6 +38,11 @@ struct RoiStereoParams {
   double range_margin_share = 0.1;
   // ... as long as at most this share of the box's target pixels has no expectation.
   double range_unknown_share = 0.1;
+  // A box wider than twice this (the rolling refresh's band spans the image) is split into
+  // pieces about this wide when their narrowed ranges, padding included, cost less than the
+  // whole box's range: the band's range is that of everything across the image, a piece's only
+  // that of what lies in it. 0 = never split.
+  int split_width_px = 160;
 
   void Validate() const;  // std::invalid_argument with the reason
 };

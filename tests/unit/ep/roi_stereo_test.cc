@@ -44,6 +44,41 @@ TEST(RoiStereo, MatchesFullFrameSgbmInsideTheMask) {
   EXPECT_GT(same, answered * 95 / 100);
 }
 
+// A band across the image (the rolling refresh) is split into pieces, each searching only the
+// range expected in it, when that costs less than one box searching the range of the whole band;
+// the pieces still give (nearly) the full-frame values.
+TEST(RoiStereo, SplitsAWideBandIntoPiecesWithTheirOwnRanges) {
+  const testing::SyntheticScene scene;
+  cv::Mat l, r, truth;
+  scene.Render(testing::HeadPose(0.02, 0.01), &l, &r, &truth);
+  cv::Mat mask(l.size(), CV_8U, cv::Scalar(0));
+  mask(cv::Rect(0, 100, l.cols, 24)).setTo(255);
+  // What the map expects: the left half near, the right half far (as a band crossing a near
+  // object and the background would).
+  cv::Mat expected(l.size(), CV_32F, cv::Scalar(6.0F));
+  expected(cv::Rect(0, 0, l.cols / 2, l.rows)).setTo(30.0F);
+  ep::RoiStereoParams whole_band;
+  whole_band.split_width_px = 0;
+  ep::RoiStereo unsplit(Params(), whole_band), split(Params());
+  cv::Mat d_unsplit(l.size(), CV_32F, cv::Scalar(-7.0F)), d_split = d_unsplit.clone();
+  const auto a = unsplit.ComputeMasked(l, r, mask, d_unsplit, expected);
+  const auto b = split.ComputeMasked(l, r, mask, d_split, expected);
+  EXPECT_EQ(a.boxes, 1);
+  EXPECT_EQ(b.boxes, 1);
+  EXPECT_EQ(a.narrowed_boxes, 0);  // the whole band needs (nearly) the full range
+  EXPECT_GE(b.narrowed_boxes, 1);
+  EXPECT_LT(b.computed_pixels, a.computed_pixels * 3 / 4);
+  EXPECT_EQ(b.target_pixels, a.target_pixels);
+  for (int v = 0; v < l.rows; ++v) {
+    for (int u = 0; u < l.cols; ++u) {
+      if (!mask.at<uint8_t>(v, u)) {
+        ASSERT_EQ(d_split.at<float>(v, u), -7.0F);
+      }
+    }
+  }
+  EXPECT_TRUE(cv::countNonZero(d_split(cv::Rect(0, 100, l.cols, 24)) == -7.0F) == 0);
+}
+
 TEST(RoiStereo, PlansBoxesThatDoNotCoverTheWholeImageForAnLShape) {
   ep::RoiStereo stereo(Params());
   cv::Mat mask(240, 320, CV_8U, cv::Scalar(0));
