@@ -387,9 +387,9 @@ OtherMap ReadPmap(const fs::path& path) {
   return m;
 }
 
-// The perceptual map over the true walls, with path and boundary (SVG, y up).
-std::string Svg(const epmap::perceptual_map::PerceptualMap& m, const Truth& truth,
-                const std::vector<Eigen::Vector2d>& true_path) {
+// The world box a picture of the map shows: true walls, map segments and path, plus 1 m.
+std::pair<Eigen::Vector2d, Eigen::Vector2d> PictureBounds(
+    const epmap::perceptual_map::PerceptualMap& m, const Truth& truth) {
   Eigen::Vector2d lo(1e9, 1e9), hi(-1e9, -1e9);
   const auto grow = [&](const Eigen::Vector2d& p) {
     lo = lo.cwiseMin(p);
@@ -410,6 +410,13 @@ std::string Svg(const epmap::perceptual_map::PerceptualMap& m, const Truth& trut
   }
   lo -= Eigen::Vector2d(1, 1);
   hi += Eigen::Vector2d(1, 1);
+  return {lo, hi};
+}
+
+// The perceptual map over the true walls, with path and boundary (SVG, y up).
+std::string Svg(const epmap::perceptual_map::PerceptualMap& m, const Truth& truth,
+                const std::vector<Eigen::Vector2d>& true_path) {
+  const auto [lo, hi] = PictureBounds(m, truth);
   const double scale = 30;  // px per metre
   const auto X = [&](const Eigen::Vector2d& p) { return (p.x() - lo.x()) * scale; };
   const auto Y = [&](const Eigen::Vector2d& p) { return (hi.y() - p.y()) * scale; };
@@ -462,26 +469,7 @@ std::string Svg(const epmap::perceptual_map::PerceptualMap& m, const Truth& trut
 // The same picture as the SVG, as a PNG (20 px per metre, y up).
 cv::Mat PmapPicture(const epmap::perceptual_map::PerceptualMap& m, const Truth& truth,
                     const std::vector<Eigen::Vector2d>& true_path) {
-  Eigen::Vector2d lo(1e9, 1e9), hi(-1e9, -1e9);
-  const auto grow = [&](const Eigen::Vector2d& p) {
-    lo = lo.cwiseMin(p);
-    hi = hi.cwiseMax(p);
-  };
-  for (const auto& w : truth.walls) {
-    grow(w.a);
-    grow(w.b);
-  }
-  for (const auto& s : m.segments) {
-    grow(s.a);
-    grow(s.b);
-  }
-  for (const auto& p : m.path) grow(p);
-  if (!(hi.x() > lo.x())) {
-    lo = Eigen::Vector2d(-1, -1);
-    hi = Eigen::Vector2d(1, 1);
-  }
-  lo -= Eigen::Vector2d(1, 1);
-  hi += Eigen::Vector2d(1, 1);
+  const auto [lo, hi] = PictureBounds(m, truth);
   const double scale = 20;
   cv::Mat img(static_cast<int>((hi.y() - lo.y()) * scale),
               static_cast<int>((hi.x() - lo.x()) * scale), CV_8UC3, cv::Scalar(255, 255, 255));

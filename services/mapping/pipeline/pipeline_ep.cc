@@ -7,15 +7,11 @@
 #include <cmath>
 
 #include "services/mapping/pipeline/pipeline.h"
+#include "services/mapping/pipeline/rectified_camera.h"
 
 namespace epmap::mapping {
 
 namespace {
-
-bool SameGeometry(const stereo::RectifiedGeometry& a, const stereo::RectifiedGeometry& b) {
-  return a.width == b.width && a.height == b.height && a.fx == b.fx && a.fy == b.fy &&
-         a.cx == b.cx && a.cy == b.cy && a.baseline_m == b.baseline_m;
-}
 
 const char* EventName(ep::FrameMode mode) {
   switch (mode) {
@@ -98,16 +94,10 @@ void Pipeline::RunExpectedPerception(const StereoFrame& frame, const stereo::Rec
     if (ep_) events_.Increment("ep_restarted_new_rectification");
     ep_ = std::make_unique<ep::ExpectedPerception>(geometry, ep_params_);
   }
-  // The rectified left camera's pose: the raw camera's, turned by the rectification (x_rect =
-  // R x_raw, so the rectified frame sits at [R^T | 0] in the raw one).
+  // The rectified left camera's pose: the raw camera's, turned by the rectification.
   Eigen::Isometry3d T_base_rect = Eigen::Isometry3d::Identity();
   if (raw_pose) {
-    Eigen::Isometry3d T_raw_rect = Eigen::Isometry3d::Identity();
-    const cv::Matx33d& R = rectifier.left_rotation();
-    for (int r = 0; r < 3; ++r) {
-      for (int c = 0; c < 3; ++c) T_raw_rect.linear()(r, c) = R(c, r);
-    }
-    T_base_rect = *raw_pose * T_raw_rect;
+    T_base_rect = *raw_pose * RawToRectified(rectifier);
   } else {
     // Without a pose nothing can be predicted: the map restarts from this frame, computed whole.
     events_.Increment("ep_restart_no_pose:" + pose_reason);

@@ -9,27 +9,13 @@
 #include <cmath>
 
 #include "services/mapping/pipeline/pipeline.h"
+#include "services/mapping/pipeline/rectified_camera.h"
 
 namespace epmap::mapping {
 
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-bool SameGeometry(const stereo::RectifiedGeometry& a, const stereo::RectifiedGeometry& b) {
-  return a.width == b.width && a.height == b.height && a.fx == b.fx && a.fy == b.fy &&
-         a.cx == b.cx && a.cy == b.cy && a.baseline_m == b.baseline_m;
-}
-
-// The rectified left camera in the raw one: x_rect = R x_raw, so it sits at [R^T | 0].
-Eigen::Isometry3d RawToRectified(const stereo::Rectifier& rectifier) {
-  Eigen::Isometry3d T_raw_rect = Eigen::Isometry3d::Identity();
-  const cv::Matx33d& R = rectifier.left_rotation();
-  for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c) T_raw_rect.linear()(r, c) = R(c, r);
-  }
-  return T_raw_rect;
-}
 
 mobile_mapping::MobileMapperParams MakeMapperParams(
     const MapsSettings& s, const std::vector<mobile_mapping::JointLimit>& limits) {
