@@ -92,8 +92,12 @@ TEST(CalibrationDurability, AJobRunningAtACrashIsInterruptedAndTheActiveModelSta
     start.mutable_spec()->mutable_eye_hand()->set_method(v1::MIXTURE);
     ASSERT_TRUE(stub->StartJob(Deadline().get(), start, &job).ok());
     queued_id = job.id();
+    // RUNNING is reported at "starting", a moment before the job reaches its wait for frames.
     job = WaitJob(
-        *stub, stereo_id, [](const v1::Job& j) { return j.state() == v1::RUNNING; },
+        *stub, stereo_id,
+        [](const v1::Job& j) {
+          return j.state() == v1::RUNNING && j.stage() == "waiting for frames";
+        },
         std::chrono::seconds(10));
     ASSERT_EQ(job.state(), v1::RUNNING);
     EXPECT_EQ(job.stage(), "waiting for frames");
