@@ -50,7 +50,9 @@ MappingService::MappingService(const ServiceConfig& config)
                config_.domain, config_.mode);
 }
 
-MappingService::~MappingService() { Shutdown(); }
+MappingService::~MappingService() {
+  Shutdown();
+}
 
 void MappingService::Shutdown() {
   if (shutting_down_.exchange(true)) return;

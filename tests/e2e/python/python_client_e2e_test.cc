@@ -15,11 +15,11 @@ TEST(PythonClientE2E, PlannerExampleReadsDepthAhead) {
   const uint32_t domain = testing::UniqueDomainId(303);
   testing::Epmapd epmapd(domain, {}, work);
   ASSERT_TRUE(epmapd.WaitReady()) << epmapd.process().Output();
-  const auto [replay_code, replay_out] = testing::RunToCompletion(
-      testing::BinDir() / "epmap-replay",
-      {(testing::SharedDataDir() / "stereo-pairs/cones").string(), "--domain",
-       std::to_string(domain)},
-      work / "replay.log", std::chrono::seconds(60));
+  const auto [replay_code, replay_out] =
+      testing::RunToCompletion(testing::BinDir() / "epmap-replay",
+                               {(testing::SharedDataDir() / "stereo-pairs/cones").string(),
+                                "--domain", std::to_string(domain)},
+                               work / "replay.log", std::chrono::seconds(60));
   ASSERT_EQ(replay_code, 0) << replay_out;
 
   const auto script = testing::SourceDir() / "clients/python/epmap_planner.py";
