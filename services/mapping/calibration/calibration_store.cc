@@ -363,6 +363,11 @@ v1::Job CalibrationStore::CreateJob(v1::JobKind kind, const v1::JobSpec& spec,
 
 void CalibrationStore::UpdateJob(const v1::Job& job) {
   std::lock_guard lock(mutex_);
+  WriteJobLocked(job);
+}
+
+// Every field of a stored job, written over its row; throws kNotFound for an unknown id.
+void CalibrationStore::WriteJobLocked(const v1::Job& job) {
   Statement update(db_,
                    "UPDATE jobs SET state = ?, stage = ?, progress = ?, iteration = ?, cost = ?, "
                    "message = ?, model_id = ?, started_ns = ?, finished_ns = ?, errors_json = ? "
@@ -461,22 +466,7 @@ v1::Model CalibrationStore::FinishJobWithModel(v1::Job& job, v1::Model model, bo
   job.set_model_id(model.id());
   job.set_finished_ns(now_ns);
   job.set_progress(1.0);
-  Statement update(db_,
-                   "UPDATE jobs SET state = ?, stage = ?, progress = ?, iteration = ?, cost = ?, "
-                   "message = ?, model_id = ?, started_ns = ?, finished_ns = ?, errors_json = ? "
-                   "WHERE id = ?");
-  update.Bind(1, static_cast<int64_t>(job.state()))
-      .Bind(2, job.stage())
-      .Bind(3, job.progress())
-      .Bind(4, static_cast<int64_t>(job.iteration()))
-      .Bind(5, job.cost())
-      .Bind(6, job.message())
-      .Bind(7, job.model_id())
-      .Bind(8, job.started_ns())
-      .Bind(9, job.finished_ns())
-      .Bind(10, ToJson(job.errors()))
-      .Bind(11, job.id())
-      .Run();
+  WriteJobLocked(job);
   if (activate) ActivateLocked(model.id(), model.kind(), now_ns);
   tx.Commit();
   model.set_active(activate);

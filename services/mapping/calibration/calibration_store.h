@@ -105,6 +105,7 @@ class CalibrationStore {
   void Exec(const char* sql) const;
   std::optional<std::string> ActiveModelId(v1::JobKind kind) const;  // caller holds mutex_
   void ActivateLocked(const std::string& id, v1::JobKind kind, int64_t now_ns);
+  void WriteJobLocked(const v1::Job& job);
 
   std::filesystem::path path_;
   int lock_fd_ = -1;
