@@ -15,13 +15,13 @@ using epmap::ctl::ClientOptions;
 void PrintHuman(const epmap::v1::ServiceStatus& s) {
   std::printf("epmapd %s, up %.1f s, mode %s\n", s.version().c_str(), s.uptime_s(),
               s.mode().c_str());
-  std::printf("frames: %llu received, %llu processed, %llu rejected, %llu dropped in queue "
-              "(depth %u/%u)\n",
-              static_cast<unsigned long long>(s.frames_received()),
-              static_cast<unsigned long long>(s.frames_processed()),
-              static_cast<unsigned long long>(s.frames_rejected()),
-              static_cast<unsigned long long>(s.queue_dropped()), s.queue_depth(),
-              s.queue_capacity());
+  std::printf(
+      "frames: %llu received, %llu processed, %llu rejected, %llu dropped in queue "
+      "(depth %u/%u)\n",
+      static_cast<unsigned long long>(s.frames_received()),
+      static_cast<unsigned long long>(s.frames_processed()),
+      static_cast<unsigned long long>(s.frames_rejected()),
+      static_cast<unsigned long long>(s.queue_dropped()), s.queue_depth(), s.queue_capacity());
   if (s.last_stamp_ns()) {
     std::printf("last frame stamp: %lld ns\n", static_cast<long long>(s.last_stamp_ns()));
   }
@@ -30,6 +30,8 @@ void PrintHuman(const epmap::v1::ServiceStatus& s) {
   std::printf("recomputed share: last %.3f, median %.3f; full refreshes %llu\n",
               s.recomputed_share_last(), s.recomputed_share_median(),
               static_cast<unsigned long long>(s.full_refreshes()));
+  if (s.unexpected_watchers())
+    std::printf("watch-unexpected streams: %u\n", s.unexpected_watchers());
   if (s.rejected_by_reason_size()) {
     std::printf("rejected:\n");
     for (const auto& c : s.rejected_by_reason()) {

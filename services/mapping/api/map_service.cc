@@ -65,6 +65,7 @@ grpc::Status MapServiceImpl::GetStatus(grpc::ServerContext*, const v1::GetStatus
   const auto& models = service_.calibration().active_models();
   out->set_active_eye_hand_model(models.eye_hand_id());
   out->set_active_stereo_model(models.stereo_id());
+  out->set_unexpected_watchers(static_cast<uint32_t>(pipeline.unexpected_hub().subscribers()));
   return grpc::Status::OK;
 }
 

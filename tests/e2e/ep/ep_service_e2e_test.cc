@@ -78,7 +78,14 @@ TEST_F(EpServiceE2E, WatchedRegionsFollowTheTrueMovingObject) {
       testing::BinDir() / "epmapctl",
       {"--server", epmapd.address(), "watch-unexpected", "--count", "2", "--seconds", "60"},
       work / "watch.log");
-  std::this_thread::sleep_for(std::chrono::milliseconds(500));  // both streams subscribed
+  // Both streams must be registered before the first frame, or the early events go unseen
+  // (a process starting on a loaded machine can take seconds).
+  ASSERT_GT(epmapd
+                .WaitStatus([](const v1::ServiceStatus& s) { return s.unexpected_watchers() >= 2; },
+                            seconds(30))
+                .unexpected_watchers(),
+            1u)
+      << ctl_watch.Output();
 
   Replay(domain, work);
   const auto status = epmapd.WaitStatus(
