@@ -486,13 +486,14 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
   state_.image = left.clone();
   state_.accumulated = res->accumulated;
   if (predicted && params_.history_reset_px > 0) {
-    // Errors explained by a wrong map are not history: forget them where the map changed (on
-    // the comparison grid, where C lives).
+    // Errors explained by a wrong map are not history: forget them where the map changed in a
+    // region recomputed because its geometry was in question (on the comparison grid, where C
+    // lives).
     const float margin = static_cast<float>(params_.history_reset_px);
     cv::Mat reset;
     for (int i = 0; i < res->accumulated.rows; ++i) {
       const int v = i * step;
-      const uint8_t* rec = res->recompute.ptr<uint8_t>(v);
+      const uint8_t* rec = uncertain.ptr<uint8_t>(v);
       const float* fresh = res->disparity.ptr<float>(v);
       const float* predicted_d = pred.geometry.ptr<float>(v);
       for (int j = 0; j < res->accumulated.cols; ++j) {
