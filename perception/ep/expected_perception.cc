@@ -90,6 +90,8 @@ cv::Mat Decimate(const cv::Mat& image, int step) {
 // one row widened, then copied to the step rows it covers.
 cv::Mat Upsample(const cv::Mat& grid_mask, const cv::Size& size, int step) {
   if (step == 1) return grid_mask;
+  // Most frames flag nothing: a memset instead of a pass.
+  if (cv::countNonZero(grid_mask) == 0) return cv::Mat::zeros(size, CV_8U);
   cv::Mat out(size, CV_8U);
   for (int v = 0; v < size.height; v += step) {
     const uint8_t* src = grid_mask.ptr<uint8_t>(v / step);

@@ -286,27 +286,32 @@ struct SplatTarget {
 };
 
 // Writes a point if it beats the pixel's current one: between two surfaces the nearer point,
-// on one surface the point nearer to the pixel centre.
-inline void Land(const SplatMotion& m, const Landing& l, const SplatTarget& t) {
-  const size_t idx =
-      static_cast<size_t>(l.vi) * static_cast<size_t>(m.W) + static_cast<size_t>(l.ui);
+// on one surface the point nearer to the pixel centre. Scalar arguments, not a Landing: built
+// in memory, the struct kept the hot loop's values out of registers.
+inline void LandAt(const SplatMotion& m, const SplatTarget& t, int ui, int vi, float x, float y,
+                   float z, float d, float du, float dv, uint8_t flags) {
+  const size_t idx = static_cast<size_t>(vi) * static_cast<size_t>(m.W) + static_cast<size_t>(ui);
   const float d_old = t.disparity[idx];  // 0 when empty
   float* dst = t.points + 3 * idx;
   if (d_old != 0.0F) {
-    if (std::abs(l.d - d_old) > m.max_step) {
-      if (l.d < d_old) return;  // behind the current surface
+    if (std::abs(d - d_old) > m.max_step) {
+      if (d < d_old) return;  // behind the current surface
     } else {
       const float inv = 1.0F / dst[2];
-      const float du_old = m.fx * dst[0] * inv + m.cx - static_cast<float>(l.ui);
-      const float dv_old = m.fy * dst[1] * inv + m.cy - static_cast<float>(l.vi);
-      if (l.du * l.du + l.dv * l.dv >= du_old * du_old + dv_old * dv_old) return;
+      const float du_old = m.fx * dst[0] * inv + m.cx - static_cast<float>(ui);
+      const float dv_old = m.fy * dst[1] * inv + m.cy - static_cast<float>(vi);
+      if (du * du + dv * dv >= du_old * du_old + dv_old * dv_old) return;
     }
   }
-  dst[0] = l.x;
-  dst[1] = l.y;
-  dst[2] = l.z;
-  t.flags[idx] = l.flags;
-  t.disparity[idx] = l.d;
+  dst[0] = x;
+  dst[1] = y;
+  dst[2] = z;
+  t.flags[idx] = flags;
+  t.disparity[idx] = d;
+}
+
+inline void Land(const SplatMotion& m, const Landing& l, const SplatTarget& t) {
+  LandAt(m, t, l.ui, l.vi, l.x, l.y, l.z, l.d, l.du, l.dv, l.flags);
 }
 
 // One row of moved points, projected: coordinates in the new camera frame, disparity, and the
@@ -388,20 +393,88 @@ void SplatRows(const MapState& previous, const SplatMotion& motion, int row_begi
       const float u1 = us[u], v1 = vs[u];
       if (u1 == -1.0F) continue;
       const int ui = static_cast<int>(u1 + 0.5F), vi = static_cast<int>(v1 + 0.5F);
-      const Landing l{ui,
-                      vi,
-                      xs[u],
-                      ys[u],
-                      zs[u],
-                      ds[u],
-                      u1 - static_cast<float>(ui),
-                      v1 - static_cast<float>(vi),
-                      m[u]};
+      const float du = u1 - static_cast<float>(ui), dv = v1 - static_cast<float>(vi);
       if (vi >= row_begin && vi < row_end) {
-        Land(motion, l, target);
+        LandAt(motion, target, ui, vi, xs[u], ys[u], zs[u], ds[u], du, dv, m[u]);
       } else {
-        crossers->push_back(l);
+        crossers->push_back({ui, vi, xs[u], ys[u], zs[u], ds[u], du, dv, m[u]});
       }
+    }
+  }
+}
+
+// Where the points of one row of the comparison grid lie in frame k (Sec. IV-A, backwards):
+// each grid pixel centre (u, v) = (j * step, v) is back-projected at its point's depth
+// z = fb / d, X' = z ray(u, v), moved back, X = R^T (X' - t), and projected, q = pi(X).
+// q = (-1, -1) where there is no point (NaN disparity), the depth is degenerate or q falls
+// outside frame k. __restrict and no branches: the loop vectorises.
+void ProjectGridRowIntoPrevious(const SplatMotion& m, const float* __restrict geometry_row, int v,
+                                int step, int n, float* __restrict qxs, float* __restrict qys) {
+  const float r00 = m.r[0], r01 = m.r[1], r02 = m.r[2];
+  const float r10 = m.r[3], r11 = m.r[4], r12 = m.r[5];
+  const float r20 = m.r[6], r21 = m.r[7], r22 = m.r[8];
+  const float tx = m.t[0], ty = m.t[1], tz = m.t[2];
+  const float fx = m.fx, fy = m.fy, cx = m.cx, cy = m.cy, fb = m.fb, min_depth = m.min_depth;
+  const float inv_fx = 1.0F / fx;
+  const float w_last = static_cast<float>(m.W - 1), h_last = static_cast<float>(m.H - 1);
+  const float ray_y = (static_cast<float>(v) - cy) / fy;
+  for (int j = 0; j < n; ++j) {
+    const float z = fb / geometry_row[j * step];                             // NaN at holes
+    const float ax = (static_cast<float>(j * step) - cx) * inv_fx * z - tx;  // X' - t
+    const float ay = ray_y * z - ty;
+    const float az = z - tz;
+    const float x = r00 * ax + r10 * ay + r20 * az;  // R^T (X' - t)
+    const float y = r01 * ax + r11 * ay + r21 * az;
+    const float zk = r02 * ax + r12 * ay + r22 * az;
+    const float inv_zk = 1.0F / zk;
+    const float qx = fx * x * inv_zk + cx, qy = fy * y * inv_zk + cy;
+    // All comparisons are false for NaN; & rather than &&: no branches.
+    const bool ok = (z > min_depth) & (zk > min_depth) & (qx >= 0) & (qy >= 0) & (qx <= w_last) &
+                    (qy <= h_last);
+    qxs[j] = ok ? qx : -1.0F;
+    qys[j] = ok ? qy : -1.0F;
+  }
+}
+
+// L^k (full resolution, 8-bit) at q and C^k (comparison grid) at q / step, both bilinear (C^k
+// with its edge replicated), for one grid row; 0 and not valid where q = -1. A non-finite C^k
+// value would spread through the sample: such samples are 0 (no history).
+void SampleGridRow(const cv::Mat& image_k, const cv::Mat& history_k, float inv_step,
+                   const float* qxs, const float* qys, int n, float* lum, float* acc,
+                   uint8_t* valid) {
+  const int W = image_k.cols, H = image_k.rows;
+  const int grid_w_last = history_k.cols - 1, grid_h_last = history_k.rows - 1;
+  for (int j = 0; j < n; ++j) {
+    const float qx = qxs[j], qy = qys[j];
+    if (qx < 0) {
+      valid[j] = 0;
+      lum[j] = 0.0F;
+      acc[j] = 0.0F;
+      continue;
+    }
+    valid[j] = 255;
+    {  // L^k at q
+      const int x0 = static_cast<int>(qx), y0 = static_cast<int>(qy);
+      const int x1 = std::min(x0 + 1, W - 1), y1 = std::min(y0 + 1, H - 1);
+      const float a = qx - static_cast<float>(x0), b = qy - static_cast<float>(y0);
+      const uint8_t* r0 = image_k.ptr<uint8_t>(y0);
+      const uint8_t* r1 = image_k.ptr<uint8_t>(y1);
+      const float top = static_cast<float>(r0[x0]) + a * static_cast<float>(r0[x1] - r0[x0]);
+      const float bottom = static_cast<float>(r1[x0]) + a * static_cast<float>(r1[x1] - r1[x0]);
+      lum[j] = top + b * (bottom - top);
+    }
+    {  // C^k at q / step
+      const float gx = qx * inv_step, gy = qy * inv_step;
+      const int x0 = std::min(static_cast<int>(gx), grid_w_last);
+      const int y0 = std::min(static_cast<int>(gy), grid_h_last);
+      const int x1 = std::min(x0 + 1, grid_w_last), y1 = std::min(y0 + 1, grid_h_last);
+      const float a = gx - static_cast<float>(x0), b = gy - static_cast<float>(y0);
+      const float* r0 = history_k.ptr<float>(y0);
+      const float* r1 = history_k.ptr<float>(y1);
+      const float top = r0[x0] * (1.0F - a) + r0[x1] * a;
+      const float bottom = r1[x0] * (1.0F - a) + r1[x1] * a;
+      const float c = top * (1.0F - b) + bottom * b;
+      acc[j] = std::isfinite(c) ? c : 0.0F;
     }
   }
 }
@@ -572,77 +645,26 @@ Prediction Predict(const MapState& previous, const Eigen::Isometry3d& T_cur_prev
   out.flags = s.flags;
 
   // 2. p(L^k; T^{k+1}, D_-^{k+1}) and p(C^k; ...) (Sec. IV-A) on the comparison grid: each of
-  //    its pixel centres (u, v) = step * (i, j) is back-projected at its point's depth,
-  //    X' = z ray(u, v), moved back into frame k, X = R^T (X' - t), and projected there:
-  //    q = pi(X). L^k is sampled at q (full resolution), C^k at q / step.
-  //    Both are interpolated bilinearly here, in the same pass (L^k as 8-bit, C^k with its edge
-  //    replicated); a non-finite C^k value would spread through the sample, so such samples are
-  //    0 (no history).
+  //    its pixel centres is back-projected at its point's depth into frame k
+  //    (ProjectGridRowIntoPrevious), where L^k and C^k are interpolated (SampleGridRow).
   const int step = params.image_step;
   const cv::Size grid = ComparisonGrid(camera, step);
   out.image.create(grid, CV_32F);
   out.accumulated.create(grid, CV_32F);
   out.image_valid.create(grid, CV_8U);
   const float inv_step = 1.0F / static_cast<float>(step);
-  const float inv_fx = 1.0F / fx;
   const cv::Mat& image_k = previous.image;
   const cv::Mat& history_k = previous.accumulated;
   cv::parallel_for_(cv::Range(0, grid.height), [&](const cv::Range& rows) {
-    // Local copies: through the captured references they would be reloaded after every store.
-    const float fx_ = fx, fy_ = fy, cx_ = cx, cy_ = cy, fb_ = fb, min_depth_ = min_depth;
-    const float w_last = static_cast<float>(W - 1), h_last = static_cast<float>(H - 1);
-    const int grid_w_last = grid.width - 1, grid_h_last = grid.height - 1;
+    // Per row, where each grid pixel's point lands in frame k (a loop the compiler vectorises:
+    // no branches, plain arrays), then the two bilinear samples there (gathers, one by one).
+    std::vector<float> qxs(static_cast<size_t>(grid.width)), qys(qxs.size());
     for (int i = rows.start; i < rows.end; ++i) {
-      const int v = i * step;
-      const float* geo = out.geometry.ptr<float>(v);  // NaN at holes
-      float* lum = out.image.ptr<float>(i);
-      float* acc = out.accumulated.ptr<float>(i);
-      uint8_t* valid = out.image_valid.ptr<uint8_t>(i);
-      const float ray_y = (static_cast<float>(v) - cy_) / fy_;
-      for (int j = 0; j < grid.width; ++j) {
-        const int u = j * step;
-        // The point's depth, from its disparity (4 bytes a pixel to read, not 12).
-        const float z = fb_ / geo[u];
-        valid[j] = 0;
-        lum[j] = 0.0F;
-        acc[j] = 0.0F;
-        if (!(z > min_depth_)) continue;  // a hole (NaN) or degenerate
-        // X' - t, then R^T.
-        const float ax = (static_cast<float>(u) - cx_) * inv_fx * z - tx;
-        const float ay = ray_y * z - ty;
-        const float az = z - tz;
-        const float x = r00 * ax + r10 * ay + r20 * az;
-        const float y = r01 * ax + r11 * ay + r21 * az;
-        const float zk = r02 * ax + r12 * ay + r22 * az;
-        const float inv_zk = 1.0F / zk;
-        const float qx = fx_ * x * inv_zk + cx_, qy = fy_ * y * inv_zk + cy_;
-        // Inside frame k (false for NaN): else nothing to sample.
-        if (!(zk > min_depth_ && qx >= 0 && qy >= 0 && qx <= w_last && qy <= h_last)) continue;
-        valid[j] = 255;
-        {  // L^k at q
-          const int x0 = static_cast<int>(qx), y0 = static_cast<int>(qy);
-          const int x1 = std::min(x0 + 1, W - 1), y1 = std::min(y0 + 1, H - 1);
-          const float a = qx - static_cast<float>(x0), b = qy - static_cast<float>(y0);
-          const uint8_t* r0 = image_k.ptr<uint8_t>(y0);
-          const uint8_t* r1 = image_k.ptr<uint8_t>(y1);
-          const float top = static_cast<float>(r0[x0]) + a * static_cast<float>(r0[x1] - r0[x0]);
-          const float bottom = static_cast<float>(r1[x0]) + a * static_cast<float>(r1[x1] - r1[x0]);
-          lum[j] = top + b * (bottom - top);
-        }
-        {  // C^k at q / step
-          const float gx = qx * inv_step, gy = qy * inv_step;
-          const int x0 = std::min(static_cast<int>(gx), grid_w_last);
-          const int y0 = std::min(static_cast<int>(gy), grid_h_last);
-          const int x1 = std::min(x0 + 1, grid_w_last), y1 = std::min(y0 + 1, grid_h_last);
-          const float a = gx - static_cast<float>(x0), b = gy - static_cast<float>(y0);
-          const float* r0 = history_k.ptr<float>(y0);
-          const float* r1 = history_k.ptr<float>(y1);
-          const float top = r0[x0] * (1.0F - a) + r0[x1] * a;
-          const float bottom = r1[x0] * (1.0F - a) + r1[x1] * a;
-          const float c = top * (1.0F - b) + bottom * b;
-          acc[j] = std::isfinite(c) ? c : 0.0F;
-        }
-      }
+      ProjectGridRowIntoPrevious(motion, out.geometry.ptr<float>(i * step), i * step, step,
+                                 grid.width, qxs.data(), qys.data());
+      SampleGridRow(image_k, history_k, inv_step, qxs.data(), qys.data(), grid.width,
+                    out.image.ptr<float>(i), out.accumulated.ptr<float>(i),
+                    out.image_valid.ptr<uint8_t>(i));
     }
   });
   return out;
