@@ -74,6 +74,8 @@ cv::Mat RemoveSpecks(const cv::Mat& mask, int open_radius_px, int min_area_px,
   } else {
     out = mask.clone();
   }
+  // Nothing left (most frames): no closing, no labelling pass over 4-byte labels.
+  if (cv::countNonZero(out) == 0) return out;
   if (close_radius_px > 0) {
     const cv::Mat k = cv::getStructuringElement(
         cv::MORPH_RECT, cv::Size(2 * close_radius_px + 1, 2 * close_radius_px + 1));
