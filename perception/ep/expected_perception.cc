@@ -75,6 +75,14 @@ cv::Mat Decimate(const cv::Mat& image, int step) {
   if (step == 1) return image;
   const cv::Size grid((image.cols + step - 1) / step, (image.rows + step - 1) / step);
   cv::Mat out(grid, image.type());
+  if (image.type() == CV_8UC1) {  // grey: a plain strided copy the compiler vectorises
+    for (int i = 0; i < grid.height; ++i) {
+      const uint8_t* __restrict src = image.ptr<uint8_t>(i * step);
+      uint8_t* __restrict dst = out.ptr<uint8_t>(i);
+      for (int j = 0; j < grid.width; ++j) dst[j] = src[j * step];
+    }
+    return out;
+  }
   const size_t elem = image.elemSize();
   for (int i = 0; i < grid.height; ++i) {
     const uint8_t* src = image.ptr<uint8_t>(i * step);
