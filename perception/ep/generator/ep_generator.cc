@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
@@ -175,6 +176,58 @@ void FillCracks(const PredictionParams& params, Splat* s) {
   }
 }
 
+// One row of FillSmallHoles: each run of small-hole pixels is filled from the points beside it.
+template <typename RunStays>
+void FillSmallHolesRow(int v, const cv::Mat& small, const RunStays& near_border_run_stays,
+                       Splat* s) {
+  constexpr float kSameSurfacePx = 2.0F;
+  const int W = s->W;
+  const uint8_t* sm = small.ptr<uint8_t>(v);
+  float* disp = s->disparity.ptr<float>(v);
+  uint8_t* f = s->flags.ptr<uint8_t>(v);
+  int u = 0;
+  while (u < W) {
+    // Most of a row has no small hole: skip it eight bytes at a time.
+    if (u + 8 <= W) {
+      uint64_t word;
+      std::memcpy(&word, sm + u, sizeof(word));
+      if (word == 0) {
+        u += 8;
+        continue;
+      }
+    }
+    if (!sm[u]) {
+      ++u;
+      continue;
+    }
+    // A run of small-hole pixels on this row, [begin, end), and the points beside it (a run
+    // may also end at a large hole).
+    const int begin = u;
+    while (u < W && sm[u]) ++u;
+    const int end = u;
+    if (near_border_run_stays(v, begin, end)) continue;
+    const float d_left = begin > 0 ? disp[begin - 1] : 0.0F;
+    const float d_right = end < W ? disp[end] : 0.0F;
+    if (!(d_left > 0) && !(d_right > 0)) continue;  // between holes: stays a hole
+    const uint8_t f_left = d_left > 0 ? f[begin - 1] : 0, f_right = d_right > 0 ? f[end] : 0;
+    const bool one_surface =
+        d_left > 0 && d_right > 0 && std::abs(d_left - d_right) <= kSameSurfacePx;
+    for (int i = begin; i < end; ++i) {
+      if (one_surface) {
+        const float t = static_cast<float>(i - begin + 1) / static_cast<float>(end - begin + 1);
+        s->SetOnRay(i, v, d_left * (1 - t) + d_right * t,
+                    static_cast<uint8_t>((f_left & f_right & kMeasured) |
+                                         ((f_left | f_right) & (kDynamic | kUnseen))));
+      } else {
+        const bool take_left = d_left > 0 && (!(d_right > 0) || d_left < d_right);
+        // A guess at what was uncovered: not a measurement.
+        s->SetOnRay(i, v, take_left ? d_left : d_right,
+                    static_cast<uint8_t>((f_left | f_right) & (kDynamic | kUnseen)));
+      }
+    }
+  }
+}
+
 // Small holes (at most max_hole_fill_px wide and tall, found as what an opening by a square of
 // that size removes from the hole mask, away from the image border: wider cracks, slivers
 // uncovered behind an edge) are filled along their row from the points on either side:
@@ -183,7 +236,6 @@ void FillCracks(const PredictionParams& params, Splat* s) {
 // interpolates one measured surface. Large holes and the newly visible border stay holes: only
 // SGBM can tell what is there.
 void FillSmallHoles(const PredictionParams& params, Splat* s) {
-  constexpr float kSameSurfacePx = 2.0F;
   const int W = s->W, H = s->H, n = params.max_hole_fill_px;
   const cv::Mat holes = s->disparity <= 0;
   cv::Mat large;
@@ -224,43 +276,11 @@ void FillSmallHoles(const PredictionParams& params, Splat* s) {
     }
     return false;
   };
-  for (int v = 0; v < H; ++v) {
-    const uint8_t* sm = small.ptr<uint8_t>(v);
-    float* disp = s->disparity.ptr<float>(v);
-    uint8_t* f = s->flags.ptr<uint8_t>(v);
-    int u = 0;
-    while (u < W) {
-      if (!sm[u]) {
-        ++u;
-        continue;
-      }
-      // A run of small-hole pixels on this row, [begin, end), and the points beside it (a run
-      // may also end at a large hole).
-      const int begin = u;
-      while (u < W && sm[u]) ++u;
-      const int end = u;
-      if (near_border_run_stays(v, begin, end)) continue;
-      const float d_left = begin > 0 ? disp[begin - 1] : 0.0F;
-      const float d_right = end < W ? disp[end] : 0.0F;
-      if (!(d_left > 0) && !(d_right > 0)) continue;  // between holes: stays a hole
-      const uint8_t f_left = d_left > 0 ? f[begin - 1] : 0, f_right = d_right > 0 ? f[end] : 0;
-      const bool one_surface =
-          d_left > 0 && d_right > 0 && std::abs(d_left - d_right) <= kSameSurfacePx;
-      for (int i = begin; i < end; ++i) {
-        if (one_surface) {
-          const float t = static_cast<float>(i - begin + 1) / static_cast<float>(end - begin + 1);
-          s->SetOnRay(i, v, d_left * (1 - t) + d_right * t,
-                      static_cast<uint8_t>((f_left & f_right & kMeasured) |
-                                           ((f_left | f_right) & (kDynamic | kUnseen))));
-        } else {
-          const bool take_left = d_left > 0 && (!(d_right > 0) || d_left < d_right);
-          // A guess at what was uncovered: not a measurement.
-          s->SetOnRay(i, v, take_left ? d_left : d_right,
-                      static_cast<uint8_t>((f_left | f_right) & (kDynamic | kUnseen)));
-        }
-      }
-    }
-  }
+  // Rows are independent (a run is filled from its own row): two threads share them.
+  cv::parallel_for_(cv::Range(0, H), [&](const cv::Range& rows) {
+    for (int v = rows.start; v < rows.end; ++v)
+      FillSmallHolesRow(v, small, near_border_run_stays, s);
+  });
 }
 
 // The moved point that lands on pixel (ui, vi) at sub-pixel offset (du, dv) from its centre.
