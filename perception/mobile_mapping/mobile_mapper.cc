@@ -236,38 +236,44 @@ void MobileMapper::Flush() {
   if (group_.open) CloseGroup(&ignored);
 }
 
+int MobileMapper::MinKeyFramesForView() const {
+  return params_.view_min_key_frames > 0 ? params_.view_min_key_frames : seen_panning_stop_ ? 2 : 1;
+}
+
 void MobileMapper::CloseGroup(KeyFrameReport* report) {
   group_.open = false;
   report->group_closed = true;
   ++counters_.groups;
-  const int min_key_frames = params_.view_min_key_frames > 0 ? params_.view_min_key_frames
-                             : seen_panning_stop_            ? 2
-                                                             : 1;
-  if (static_cast<int>(group_.frames.size()) < min_key_frames) {
+  if (static_cast<int>(group_.frames.size()) < MinKeyFramesForView()) {
     ++counters_.groups_too_short;
     group_.frames.clear();
     return;
   }
+  MergeGroup(group_, {grid_, perceptual_, poses_, counters_}, report);
+  group_.frames.clear();
+}
+
+void MobileMapper::MergeGroup(const Group& group, MapsState state, KeyFrameReport* report) const {
   // The stop's pose: every key frame of the group stands there (the latest record is its last).
-  const Eigen::Isometry3d T_world_base = To3d(poses_.latest().T_world_base);
+  const Eigen::Isometry3d T_world_base = To3d(state.poses.latest().T_world_base);
   Eigen::Isometry3d T_floor = Eigen::Isometry3d::Identity();
   T_floor.translation().z() = -params_.floor_z_in_base_m;  // world z = height above the floor
   const Eigen::Isometry3d T = T_floor * T_world_base;
 
   // Local occupancy map of the stop, in the world frame at the current pose estimate.
   occupancy::LayeredGrid local(params_.grid);
-  for (const auto& fp : group_.frames) {
+  for (const auto& fp : group.frames) {
     const Eigen::Vector3d origin = T * fp.camera_in_base;
     for (size_t i = 0; i < fp.points_base.size(); ++i) {
       local.AddPoint(origin, T * fp.points_base[i], fp.sigmas[i], params_.measurement);
     }
   }
   int sx = 0, sy = 0;
-  if (!grid_.empty() && params_.map_correlation) {
-    const auto reg = occupancy::CorrelateMaps(local, grid_, params_.correlation_search_m);
-    ++counters_.registrations;
+  if (!state.grid.empty() && params_.map_correlation) {
+    const auto reg = occupancy::CorrelateMaps(local, state.grid, params_.correlation_search_m);
+    ++state.counters.registrations;
     const int border =
-        static_cast<int>(std::ceil(params_.correlation_search_m / grid_.resolution()));
+        static_cast<int>(std::ceil(params_.correlation_search_m / state.grid.resolution()));
     const bool on_border = std::abs(reg.dx_cells) >= border || std::abs(reg.dy_cells) >= border;
     if (reg.local_cells >= params_.correlation_min_cells && !on_border) {
       // Along each axis, the shift counts only if the peak is sharp there (a corridor leaves
@@ -279,36 +285,57 @@ void MobileMapper::CloseGroup(KeyFrameReport* report) {
       const bool take_y = sharp_y && (reg.dy_cells == 0 || gain);
       const Eigen::Vector2d shift(take_x ? reg.dx_m : 0.0, take_y ? reg.dy_m : 0.0);
       if (shift.norm() > params_.correlation_max_shift_m) {
-        ++counters_.shifts_refused;  // far more than odometry drifts between two stops
+        ++state.counters.shifts_refused;  // far more than odometry drifts between two stops
       } else if (shift.norm() >= params_.correlation_min_shift_m) {
         sx = take_x ? reg.dx_cells : 0;
         sy = take_y ? reg.dy_cells : 0;
         report->shifted = true;
         report->shift_m = shift;
-        poses_.ApplyTranslation(shift, group_.first_record);
-        ++counters_.shifts_applied;
+        state.poses.ApplyTranslation(shift, group.first_record);
+        ++state.counters.shifts_applied;
       }
     } else if (on_border) {
-      ++counters_.shifts_refused;  // the peak is at the edge of the search: no peak at all
+      ++state.counters.shifts_refused;  // the peak is at the edge of the search: no peak at all
     }
   }
-  grid_.MergeWeighted(local, sx, sy);
+  state.grid.MergeWeighted(local, sx, sy);
 
   // A view of the perceptual map from every key frame of the stop.
   std::vector<Eigen::Vector2d> points;
-  for (const auto& fp : group_.frames) {
+  for (const auto& fp : group.frames) {
     points.insert(points.end(), fp.reference_points.begin(), fp.reference_points.end());
   }
-  const auto added =
-      perceptual_.AddView(poses_.latest().stamp_ns, points, poses_.latest().T_world_base);
+  const auto added = state.perceptual.AddView(state.poses.latest().stamp_ns, points,
+                                              state.poses.latest().T_world_base);
   if (added.skipped) {
-    ++counters_.views_without_objects;
+    ++state.counters.views_without_objects;
     report->view_skipped = true;
   } else {
-    ++counters_.views;
+    ++state.counters.views;
     report->map_expanded = added.expanded;
   }
-  group_.frames.clear();
+}
+
+bool MobileMapper::open_stop_makes_view() const {
+  return group_.open && static_cast<int>(group_.frames.size()) >= MinKeyFramesForView();
+}
+
+std::shared_ptr<const MapsSnapshot> MobileMapper::SnapshotWithOpenStop() const {
+  if (!open_stop_makes_view()) return Snapshot();
+  occupancy::LayeredGrid grid = grid_;  // deep copies: the maps themselves stay as they are
+  perceptual_map::PerceptualMapper perceptual = perceptual_;
+  localisation::PoseCorrector poses = poses_;
+  MapperCounters counters = counters_;
+  KeyFrameReport ignored;
+  MergeGroup(group_, {grid, perceptual, poses, counters}, &ignored);
+  auto s = std::make_shared<MapsSnapshot>();
+  s->stamp_ns = last_stamp_ns_;
+  s->includes_open_stop = true;
+  s->perceptual = perceptual.Map(true);
+  s->grid = std::move(grid);
+  s->poses = poses.records();
+  s->counters = counters_;  // what happened, not what the provisional merge would count
+  return s;
 }
 
 std::shared_ptr<const MapsSnapshot> MobileMapper::Snapshot() const {

@@ -152,6 +152,7 @@ struct MapperCounters {
 // What readers get: immutable once built.
 struct MapsSnapshot {
   int64_t stamp_ns = 0;
+  bool includes_open_stop = false;  // the stop under way is merged provisionally
   perceptual_map::PerceptualMap perceptual;
   occupancy::LayeredGrid grid;
   std::vector<localisation::PoseRecord> poses;  // one per accepted key frame
@@ -174,6 +175,14 @@ class MobileMapper {
 
   // An immutable copy of everything a reader may want.
   std::shared_ptr<const MapsSnapshot> Snapshot() const;
+  // The same, with the open stop merged as if it closed now (on copies: the maps themselves
+  // wait until the base moves on, when the stop is complete). A stop joins the maps only when
+  // it ends; a planner asking while the robot stands and looks around wants what it sees now.
+  // Without an open stop that would make a view, the same as Snapshot(). Costs a copy of the
+  // maps and one registration.
+  std::shared_ptr<const MapsSnapshot> SnapshotWithOpenStop() const;
+  // A stop is open that would make a view if it closed now.
+  bool open_stop_makes_view() const;
 
   const MapperCounters& counters() const { return counters_; }
   const localisation::PoseCorrector& poses() const { return poses_; }
@@ -196,8 +205,20 @@ class MobileMapper {
     std::vector<FramePoints> frames;
   };
 
+  // What closing a stop changes: the maps, the poses (registration) and the counters.
+  struct MapsState {
+    occupancy::LayeredGrid& grid;
+    perceptual_map::PerceptualMapper& perceptual;
+    localisation::PoseCorrector& poses;
+    MapperCounters& counters;
+  };
+
   std::optional<Rejection> Check(const KeyFrame& frame) const;
+  int MinKeyFramesForView() const;
   void CloseGroup(KeyFrameReport* report);
+  // Registers the group's local map, merges it and adds its view (paper 002 Sec. 4, paper 003
+  // Sec. III-C) into `state`.
+  void MergeGroup(const Group& group, MapsState state, KeyFrameReport* report) const;
 
   stereo::RectifiedGeometry camera_;
   MobileMapperParams params_;

@@ -127,6 +127,42 @@ TEST_F(MobileMapperTest, AutomaticViewSizeFollowsPanningStops) {
   EXPECT_EQ(c.views + c.groups_too_short, c.groups);
 }
 
+// The run ends standing at a stop, panning: the maps leave that stop out until the base moves
+// on, the provisional snapshot merges it on copies, and it is exactly what closing the stop
+// then gives.
+TEST_F(MobileMapperTest, TheOpenStopIsInTheProvisionalSnapshotOnly) {
+  MobileMapper mapper(testing::BumblebeeLikeCamera(), Params());
+  for (const auto& f : *frames_) ASSERT_TRUE(mapper.AddKeyFrame(f).accepted);
+  ASSERT_TRUE(mapper.open_stop_makes_view());
+  const auto committed = mapper.Snapshot();
+  const auto provisional = mapper.SnapshotWithOpenStop();
+  EXPECT_FALSE(committed->includes_open_stop);
+  EXPECT_TRUE(provisional->includes_open_stop);
+  EXPECT_EQ(provisional->perceptual.views.size(), committed->perceptual.views.size() + 1);
+  EXPECT_EQ(provisional->counters.views, committed->counters.views);  // nothing counted twice
+  // The mapper itself is untouched.
+  EXPECT_EQ(mapper.Snapshot()->perceptual.views.size(), committed->perceptual.views.size());
+  EXPECT_EQ(mapper.Snapshot()->perceptual.segments.size(), committed->perceptual.segments.size());
+
+  mapper.Flush();
+  EXPECT_FALSE(mapper.open_stop_makes_view());
+  const auto closed = mapper.Snapshot();
+  EXPECT_EQ(closed->perceptual.views.size(), provisional->perceptual.views.size());
+  ASSERT_EQ(closed->perceptual.segments.size(), provisional->perceptual.segments.size());
+  for (size_t i = 0; i < closed->perceptual.segments.size(); ++i) {
+    EXPECT_EQ(closed->perceptual.segments[i].a, provisional->perceptual.segments[i].a);
+    EXPECT_EQ(closed->perceptual.segments[i].b, provisional->perceptual.segments[i].b);
+  }
+  const auto closed_grid = closed->grid.Export();
+  const auto provisional_grid = provisional->grid.Export();
+  EXPECT_EQ(closed_grid.occupancy, provisional_grid.occupancy);
+  EXPECT_NE(closed_grid.occupancy, committed->grid.Export().occupancy);  // the stop added cells
+  EXPECT_EQ(closed->poses.back().T_world_base.matrix(),
+            provisional->poses.back().T_world_base.matrix());
+  // Without an open stop the two snapshots agree.
+  EXPECT_FALSE(mapper.SnapshotWithOpenStop()->includes_open_stop);
+}
+
 TEST_F(MobileMapperTest, RefusesBadKeyFramesAndKeepsTheMapsIntact) {
   MobileMapper mapper(testing::BumblebeeLikeCamera(), Params());
   const size_t half = frames_->size() / 2;
