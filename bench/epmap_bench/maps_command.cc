@@ -188,9 +188,10 @@ RunResult Run(const Prepared& p, epmap::mobile_mapping::MobileMapperParams param
     const auto t1 = std::chrono::steady_clock::now();
     out.key_frame_ms.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
     if (time_sgbm) {
-      // What the service does after each key frame: publish an immutable snapshot.
+      // What the service does after each key frame: publish an immutable snapshot, with the
+      // stop under way merged provisionally while the base stands there.
       const auto s0 = std::chrono::steady_clock::now();
-      (void)mapper.Snapshot();
+      (void)mapper.SnapshotWithOpenStop();
       out.snapshot_ms.push_back(
           std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - s0).count());
     }

@@ -1,7 +1,8 @@
 // epmapctl pmap --out map.svg|map.json: the perceptual map of a mobile base (issue 6).
 // .json in the layout `epmap-bench maps` writes (metres, world frame = the robot's start
-// pose): {"segments":[{"id","x1","y1","x2","y2","view_id","observations"}],"path":[[x,y]],
-// "boundary":[[x,y]],"inner_boundary":[[x,y]],"views":[...]}; .svg a picture for people.
+// pose): {"stamp_ns","includes_open_stop","segments":[{"id","x1","y1","x2","y2","view_id",
+// "observations"}],"path":[[x,y]],"boundary":[[x,y]],"inner_boundary":[[x,y]],"views":[...]};
+// .svg a picture for people.
 
 #include <algorithm>
 #include <cstdio>
@@ -34,7 +35,9 @@ std::string Points(const google::protobuf::RepeatedPtrField<epmap::v1::Point2D>&
 
 std::string Json(const epmap::v1::PerceptualMap& m) {
   std::ostringstream s;
-  s << "{\"stamp_ns\":" << m.stamp_ns() << ",\"segments\":[";
+  s << "{\"stamp_ns\":" << m.stamp_ns()
+    << ",\"includes_open_stop\":" << (m.includes_open_stop() ? "true" : "false")
+    << ",\"segments\":[";
   for (int i = 0; i < m.segments_size(); ++i) {
     const auto& g = m.segments(i);
     s << (i ? "," : "") << "{\"id\":" << g.id() << ",\"x1\":" << Num(g.x1())
@@ -110,9 +113,10 @@ int Run(const ClientOptions& options, const std::string& out_path) {
     std::cerr << "epmapctl: cannot write " << out_path << "\n";
     return 1;
   }
-  std::printf("wrote %s: %d segments, %d views, path of %d points (stamp %lld ns)\n",
+  std::printf("wrote %s: %d segments, %d views, path of %d points (stamp %lld ns)%s\n",
               out_path.c_str(), map.segments_size(), map.views_size(), map.path_size(),
-              static_cast<long long>(map.stamp_ns()));
+              static_cast<long long>(map.stamp_ns()),
+              map.includes_open_stop() ? ", with the stop under way (provisional)" : "");
   return 0;
 }
 

@@ -1,5 +1,6 @@
 #include "perception/mobile_mapping/mobile_mapper.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -316,12 +317,13 @@ void MobileMapper::MergeGroup(const Group& group, MapsState state, KeyFrameRepor
   }
 }
 
-bool MobileMapper::open_stop_makes_view() const {
-  return group_.open && static_cast<int>(group_.frames.size()) >= MinKeyFramesForView();
+bool MobileMapper::standing_at_stop() const {
+  return group_.open &&
+         static_cast<int>(group_.frames.size()) >= std::max(2, MinKeyFramesForView());
 }
 
 std::shared_ptr<const MapsSnapshot> MobileMapper::SnapshotWithOpenStop() const {
-  if (!open_stop_makes_view()) return Snapshot();
+  if (!standing_at_stop()) return Snapshot();
   occupancy::LayeredGrid grid = grid_;  // deep copies: the maps themselves stay as they are
   perceptual_map::PerceptualMapper perceptual = perceptual_;
   localisation::PoseCorrector poses = poses_;

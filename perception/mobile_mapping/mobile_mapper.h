@@ -178,11 +178,13 @@ class MobileMapper {
   // The same, with the open stop merged as if it closed now (on copies: the maps themselves
   // wait until the base moves on, when the stop is complete). A stop joins the maps only when
   // it ends; a planner asking while the robot stands and looks around wants what it sees now.
-  // Without an open stop that would make a view, the same as Snapshot(). Costs a copy of the
-  // maps and one registration.
+  // Without a standing stop (below), the same as Snapshot(). Costs a copy of the maps and one
+  // registration.
   std::shared_ptr<const MapsSnapshot> SnapshotWithOpenStop() const;
-  // A stop is open that would make a view if it closed now.
-  bool open_stop_makes_view() const;
+  // The base stands at an open stop (two key frames or more there) that would make a view if
+  // it closed now. (A moving base opens a one-key-frame group at each key frame; the next one
+  // closes it.)
+  bool standing_at_stop() const;
 
   const MapperCounters& counters() const { return counters_; }
   const localisation::PoseCorrector& poses() const { return poses_; }

@@ -57,6 +57,7 @@ grpc::Status MapServiceImpl::GetPerceptualMap(grpc::ServerContext*,
   if (auto status = LatestMaps(service_, &maps); !status.ok()) return status;
   const auto& m = maps->perceptual;
   out->set_stamp_ns(maps->stamp_ns);
+  out->set_includes_open_stop(maps->includes_open_stop);
   for (const auto& s : m.segments) {
     auto* seg = out->add_segments();
     seg->set_id(s.id);
@@ -101,13 +102,15 @@ grpc::Status MapServiceImpl::GetOccupancyGrid(grpc::ServerContext*,
   }
   const occupancy::GridExport g = maps->grid.Export(layer);
   if (g.width == 0 || g.height == 0) {
-    // A stop's points join the grid when the base moves on from it; an empty map is no map.
+    // A stop's points join the grid once the stop would make a view (provisionally while the
+    // base stands, for good when it moves on); an empty map is no map.
     return {grpc::StatusCode::FAILED_PRECONDITION,
             std::string(layer ? "layer " + std::to_string(*layer) + " of the" : "the") +
-                " occupancy grid has no known cell yet (a stop's points join it when the base "
-                "moves on)"};
+                " occupancy grid has no known cell yet (a stop joins it once it makes a view: "
+                "provisionally while the base stands there, for good when it moves on)"};
   }
   out->set_stamp_ns(maps->stamp_ns);
+  out->set_includes_open_stop(maps->includes_open_stop);
   out->set_resolution_m(g.resolution_m);
   out->mutable_origin()->set_x(g.origin_x);
   out->mutable_origin()->set_y(g.origin_y);

@@ -166,6 +166,7 @@ void Apply(const YAML::Node& root, ServiceConfig& c) {
     s.Get("max_odometry_step_m", c.maps.max_odometry_step_m);
     s.Get("max_odometry_step_rad", c.maps.max_odometry_step_rad);
     s.Get("max_odometry_speed_mps", c.maps.max_odometry_speed_mps);
+    s.Get("open_stop_in_maps", c.maps.open_stop_in_maps);
     s.RejectUnknownKeys();
   }
   {
@@ -380,6 +381,7 @@ std::string ToYaml(const ServiceConfig& c) {
   out << YAML::Key << "max_odometry_step_m" << YAML::Value << c.maps.max_odometry_step_m;
   out << YAML::Key << "max_odometry_step_rad" << YAML::Value << c.maps.max_odometry_step_rad;
   out << YAML::Key << "max_odometry_speed_mps" << YAML::Value << c.maps.max_odometry_speed_mps;
+  out << YAML::Key << "open_stop_in_maps" << YAML::Value << c.maps.open_stop_in_maps;
   out << YAML::EndMap;
   out << YAML::Key << "log" << YAML::Value << YAML::BeginMap << YAML::Key << "level" << YAML::Value
       << c.log_level << YAML::EndMap;

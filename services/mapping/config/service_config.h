@@ -75,6 +75,10 @@ struct MapsSettings {
   double max_odometry_step_m = 2.0;
   double max_odometry_step_rad = 1.6;
   double max_odometry_speed_mps = 3.0;
+  // While the base stands at a stop, the maps served include that stop provisionally (rebuilt
+  // at each key frame: a copy of the maps and a registration); false: a stop shows only once
+  // the base moves on.
+  bool open_stop_in_maps = true;
 };
 
 struct ServiceConfig {

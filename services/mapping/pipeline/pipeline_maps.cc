@@ -108,10 +108,19 @@ void Pipeline::RunMaps(const StereoFrame& frame, const stereo::Rectifier& rectif
   if (report.edge_points == 0) events_.Increment("maps_key_frame_without_edges");
   if (report.view_skipped) events_.Increment("maps_view_without_objects");
   if (report.shifted) events_.Increment("maps_correlation_shifts");
-  maps_ = mapper_->Snapshot();
-  snapshot.maps = maps_;
   stage_ms_.Add("maps.key_frame",
                 std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+  // While the robot stands at a stop, readers get the stop merged provisionally: a planner
+  // wants what the robot sees now; the maps take the stop in for good when the base moves on.
+  if (config_.maps.open_stop_in_maps && mapper_->standing_at_stop()) {
+    const auto t1 = Clock::now();
+    maps_ = mapper_->SnapshotWithOpenStop();
+    stage_ms_.Add("maps.open_stop",
+                  std::chrono::duration<double, std::milli>(Clock::now() - t1).count());
+  } else {
+    maps_ = mapper_->Snapshot();
+  }
+  snapshot.maps = maps_;
 }
 
 }  // namespace epmap::mapping

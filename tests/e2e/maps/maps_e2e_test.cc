@@ -379,4 +379,65 @@ TEST(MapsE2E, BadInputIsCountedAndTheMapsStayIntact) {
 }
 
 }  // namespace
+// A robot that stops and looks around: while the base stands, the maps served already hold
+// what it sees there (marked provisional); once the base moves on, the stop joins them for good.
+TEST(MapsE2E, AStopUnderWayIsServedBeforeTheBaseMovesOn) {
+  const auto work = testing::FreshTempDir("maps-open-stop");
+  const uint32_t domain = testing::UniqueDomainId(63);
+  const auto rec = work / "rec";
+  const auto [rec_code, rec_out] = testing::RunToCompletion(
+      testing::BinDir() / "epmap-sim",
+      {"record", "--scenario", "building", "--frames", "2", "--out", rec.string()},
+      work / "record.log", std::chrono::seconds(60));
+  ASSERT_EQ(rec_code, 0) << rec_out;
+  testing::Epmapd epmapd(domain, {"--urdf", (rec / "mav0" / "kinematics.urdf").string()}, work);
+  ASSERT_TRUE(epmapd.WaitReady()) << epmapd.process().Output();
+  MobileBasePublisher pub(domain);
+  ASSERT_TRUE(pub.WaitMatched());
+
+  const int64_t t0 = 1'700'000'000'000'000'000;
+  const auto stamp = [&](int i) { return t0 + i * 200'000'000LL; };
+  const auto key_frames = [&](uint64_t n) {
+    return epmapd.WaitStatus(
+        [&](const v1::ServiceStatus& s) {
+          return testing::Epmapd::Count(s.events(), "maps_key_frames") >= n;
+        },
+        std::chrono::seconds(30));
+  };
+  // Standing at x = 0, the head pans: four key frames at one stop.
+  const double pans[] = {0.0, 0.3, 0.6, 0.9};
+  for (int i = 0; i < 4; ++i) pub.Frame(stamp(i), 0.0, pans[i], false);
+  const auto standing = key_frames(4);
+  ASSERT_EQ(testing::Epmapd::Count(standing.events(), "maps_key_frames"), 4u)
+      << standing.DebugString();
+
+  v1::PerceptualMap during;
+  {
+    grpc::ClientContext context;
+    ASSERT_TRUE(epmapd.stub().GetPerceptualMap(&context, {}, &during).ok());
+  }
+  EXPECT_TRUE(during.includes_open_stop());
+  EXPECT_GE(during.views_size(), 1);
+  v1::OccupancyGrid grid;
+  {
+    grpc::ClientContext context;
+    const auto status = epmapd.stub().GetOccupancyGrid(&context, {}, &grid);
+    ASSERT_TRUE(status.ok()) << status.error_message();  // before: no known cell until it moved
+  }
+  EXPECT_TRUE(grid.includes_open_stop());
+  EXPECT_GT(grid.width() * grid.height(), 0u);
+
+  // The base moves on: the stop is closed and joins the maps for good.
+  pub.Frame(stamp(4), 0.5, 0.9, false);
+  key_frames(5);
+  v1::PerceptualMap after;
+  {
+    grpc::ClientContext context;
+    ASSERT_TRUE(epmapd.stub().GetPerceptualMap(&context, {}, &after).ok());
+  }
+  EXPECT_FALSE(after.includes_open_stop());
+  EXPECT_EQ(after.views_size(), during.views_size());
+  EXPECT_EQ(after.segments_size(), during.segments_size());
+}
+
 }  // namespace epmap

@@ -133,7 +133,7 @@ TEST_F(MobileMapperTest, AutomaticViewSizeFollowsPanningStops) {
 TEST_F(MobileMapperTest, TheOpenStopIsInTheProvisionalSnapshotOnly) {
   MobileMapper mapper(testing::BumblebeeLikeCamera(), Params());
   for (const auto& f : *frames_) ASSERT_TRUE(mapper.AddKeyFrame(f).accepted);
-  ASSERT_TRUE(mapper.open_stop_makes_view());
+  ASSERT_TRUE(mapper.standing_at_stop());
   const auto committed = mapper.Snapshot();
   const auto provisional = mapper.SnapshotWithOpenStop();
   EXPECT_FALSE(committed->includes_open_stop);
@@ -145,7 +145,7 @@ TEST_F(MobileMapperTest, TheOpenStopIsInTheProvisionalSnapshotOnly) {
   EXPECT_EQ(mapper.Snapshot()->perceptual.segments.size(), committed->perceptual.segments.size());
 
   mapper.Flush();
-  EXPECT_FALSE(mapper.open_stop_makes_view());
+  EXPECT_FALSE(mapper.standing_at_stop());
   const auto closed = mapper.Snapshot();
   EXPECT_EQ(closed->perceptual.views.size(), provisional->perceptual.views.size());
   ASSERT_EQ(closed->perceptual.segments.size(), provisional->perceptual.segments.size());
