@@ -76,7 +76,7 @@ TEST_F(EpServiceE2E, WatchedRegionsFollowTheTrueMovingObject) {
   // epmapctl's stream too, as a person would run it: one JSON line per event.
   testing::ChildProcess ctl_watch(
       testing::BinDir() / "epmapctl",
-      {"--server", epmapd.address(), "watch-unexpected", "--count", "2", "--seconds", "60"},
+      {"--server", epmapd.address(), "watch-unexpected", "--count", "2", "--seconds", "120"},
       work / "watch.log");
   // Both streams must be registered before the first frame, or the early events go unseen
   // (a process starting on a loaded machine can take seconds).
