@@ -14,6 +14,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <memory>
 #include <numbers>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -310,25 +311,40 @@ class MobileBasePublisher {
   dds::Writer<nav_msgs::msg::Odometry, nav_msgs::msg::OdometryPubSubType> odom_;
 };
 
+// epmapd with the building robot's URDF (pan limits +-2.6 rad, from a two-frame recording),
+// fed frame by frame by a MobileBasePublisher.
+class MapsFromPublishedFrames : public ::testing::Test {
+ protected:
+  void Start(const std::string& name, uint32_t domain_salt) {
+    const auto work = testing::FreshTempDir(name);
+    const uint32_t domain = testing::UniqueDomainId(domain_salt);
+    const auto rec = work / "rec";
+    const auto [rec_code, rec_out] = testing::RunToCompletion(
+        testing::BinDir() / "epmap-sim",
+        {"record", "--scenario", "building", "--frames", "2", "--out", rec.string()},
+        work / "record.log", std::chrono::seconds(60));
+    ASSERT_EQ(rec_code, 0) << rec_out;
+    epmapd_ = std::make_unique<testing::Epmapd>(
+        domain, std::vector<std::string>{"--urdf", (rec / "mav0" / "kinematics.urdf").string()},
+        work);
+    ASSERT_TRUE(epmapd_->WaitReady()) << epmapd_->process().Output();
+    pub_ = std::make_unique<MobileBasePublisher>(domain);
+    ASSERT_TRUE(pub_->WaitMatched());
+  }
+  // Frame i's stamp: 5 frames a second.
+  static int64_t Stamp(int i) { return 1'700'000'000'000'000'000 + i * 200'000'000LL; }
+
+  std::unique_ptr<testing::Epmapd> epmapd_;
+  std::unique_ptr<MobileBasePublisher> pub_;
+};
+
 // Odometry jumping or going back in time, a pan outside the URDF's limits and a key frame
 // without edges: each counted under its reason, the maps keep every good key frame.
-TEST(MapsE2E, BadInputIsCountedAndTheMapsStayIntact) {
-  const auto work = testing::FreshTempDir("maps-bad-input");
-  const uint32_t domain = testing::UniqueDomainId(62);
-  // The building robot's URDF (pan limits +-2.6 rad), from a two-frame recording.
-  const auto rec = work / "rec";
-  const auto [rec_code, rec_out] = testing::RunToCompletion(
-      testing::BinDir() / "epmap-sim",
-      {"record", "--scenario", "building", "--frames", "2", "--out", rec.string()},
-      work / "record.log", std::chrono::seconds(60));
-  ASSERT_EQ(rec_code, 0) << rec_out;
-  testing::Epmapd epmapd(domain, {"--urdf", (rec / "mav0" / "kinematics.urdf").string()}, work);
-  ASSERT_TRUE(epmapd.WaitReady()) << epmapd.process().Output();
-  MobileBasePublisher pub(domain);
-  ASSERT_TRUE(pub.WaitMatched());
-
-  const int64_t t0 = 1'700'000'000'000'000'000;
-  const auto stamp = [&](int i) { return t0 + i * 200'000'000LL; };
+TEST_F(MapsFromPublishedFrames, BadInputIsCountedAndTheMapsStayIntact) {
+  ASSERT_NO_FATAL_FAILURE(Start("maps-bad-input", 62));
+  auto& epmapd = *epmapd_;
+  auto& pub = *pub_;
+  const auto stamp = &Stamp;
   int good = 0;
   for (int i = 0; i < 6; ++i, ++good) pub.Frame(stamp(i), 0.3 * i, 0.0, false);
   pub.Frame(stamp(6), 0.3 * 6 + 5.0, 0.0, false);  // odometry jumps 5 m for one sample
@@ -378,25 +394,13 @@ TEST(MapsE2E, BadInputIsCountedAndTheMapsStayIntact) {
       << bad_layer.error_message();
 }
 
-}  // namespace
 // A robot that stops and looks around: while the base stands, the maps served already hold
 // what it sees there (marked provisional); once the base moves on, the stop joins them for good.
-TEST(MapsE2E, AStopUnderWayIsServedBeforeTheBaseMovesOn) {
-  const auto work = testing::FreshTempDir("maps-open-stop");
-  const uint32_t domain = testing::UniqueDomainId(63);
-  const auto rec = work / "rec";
-  const auto [rec_code, rec_out] = testing::RunToCompletion(
-      testing::BinDir() / "epmap-sim",
-      {"record", "--scenario", "building", "--frames", "2", "--out", rec.string()},
-      work / "record.log", std::chrono::seconds(60));
-  ASSERT_EQ(rec_code, 0) << rec_out;
-  testing::Epmapd epmapd(domain, {"--urdf", (rec / "mav0" / "kinematics.urdf").string()}, work);
-  ASSERT_TRUE(epmapd.WaitReady()) << epmapd.process().Output();
-  MobileBasePublisher pub(domain);
-  ASSERT_TRUE(pub.WaitMatched());
-
-  const int64_t t0 = 1'700'000'000'000'000'000;
-  const auto stamp = [&](int i) { return t0 + i * 200'000'000LL; };
+TEST_F(MapsFromPublishedFrames, AStopUnderWayIsServedBeforeTheBaseMovesOn) {
+  ASSERT_NO_FATAL_FAILURE(Start("maps-open-stop", 63));
+  auto& epmapd = *epmapd_;
+  auto& pub = *pub_;
+  const auto stamp = &Stamp;
   const auto key_frames = [&](uint64_t n) {
     return epmapd.WaitStatus(
         [&](const v1::ServiceStatus& s) {
@@ -440,4 +444,5 @@ TEST(MapsE2E, AStopUnderWayIsServedBeforeTheBaseMovesOn) {
   EXPECT_EQ(after.segments_size(), during.segments_size());
 }
 
+}  // namespace
 }  // namespace epmap
