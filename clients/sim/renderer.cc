@@ -206,21 +206,6 @@ void Shade(const std::vector<PreparedQuad>& prepared, const cv::Mat& face_buffer
 
 }  // namespace
 
-dataset::CameraSensor SensorDescription(const PinholeCamera& camera,
-                                        const Eigen::Isometry3d& T_base_cam, double rate_hz) {
-  dataset::CameraSensor s;
-  s.width = camera.width;
-  s.height = camera.height;
-  s.fu = camera.fx;
-  s.fv = camera.fy;
-  s.cu = camera.cx;
-  s.cv = camera.cy;
-  s.distortion = {0, 0, 0, 0};
-  s.T_BS = T_base_cam.matrix();
-  s.rate_hz = rate_hz;
-  return s;
-}
-
 void Render(const Scene& scene, const std::vector<Quad>& moving, const PinholeCamera& camera,
             const Eigen::Isometry3d& T_world_cam, RenderOutput* out, float background) {
   if (camera.width <= 0 || camera.height <= 0 || camera.fx <= 0 || camera.fy <= 0) {

@@ -25,9 +25,13 @@ struct PinholeCamera {
   double fx = 0, fy = 0, cx = 0, cy = 0;
 };
 
-// The sensor.yaml a rectified (distortion-free) pinhole camera at `T_base_cam` is written with.
-dataset::CameraSensor SensorDescription(const PinholeCamera& camera,
-                                        const Eigen::Isometry3d& T_base_cam, double rate_hz);
+// The sensor.yaml the camera at `T_base_cam` is written with.
+inline dataset::CameraSensor SensorDescription(const PinholeCamera& c,
+                                               const Eigen::Isometry3d& T_base_cam,
+                                               double rate_hz) {
+  return dataset::RectifiedPinholeSensor(c.width, c.height, c.fx, c.fy, c.cx, c.cy, T_base_cam,
+                                         rate_hz);
+}
 
 // A textured parallelogram: the points origin + a * edge_u + b * edge_v, a and b in [0, 1].
 // Its front side is the one from which edge_u points right and edge_v points down, as the

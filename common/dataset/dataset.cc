@@ -375,4 +375,20 @@ std::optional<PlanarPose> InterpolatePlanar(const std::vector<PlanarPose>& sampl
                     std::remainder(lo->theta + w * dtheta, 2.0 * std::numbers::pi)};
 }
 
+CameraSensor RectifiedPinholeSensor(int width, int height, double fx, double fy, double cx,
+                                    double cy, const Eigen::Isometry3d& T_base_cam,
+                                    double rate_hz) {
+  CameraSensor s;
+  s.width = width;
+  s.height = height;
+  s.fu = fx;
+  s.fv = fy;
+  s.cu = cx;
+  s.cv = cy;
+  s.distortion = {0, 0, 0, 0};
+  s.T_BS = T_base_cam.matrix();
+  s.rate_hz = rate_hz;
+  return s;
+}
+
 }  // namespace epmap::dataset

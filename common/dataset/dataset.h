@@ -27,6 +27,11 @@ struct CameraSensor {
   double rate_hz = 0;
 };
 
+// The description of a rectified (distortion-free) pinhole camera at T_base_cam, as the
+// synthetic datasets write it.
+CameraSensor RectifiedPinholeSensor(int width, int height, double fx, double fy, double cx,
+                                    double cy, const Eigen::Isometry3d& T_base_cam, double rate_hz);
+
 struct StereoFrame {
   int64_t stamp_ns = 0;
   std::filesystem::path left;

@@ -357,16 +357,8 @@ inline void WriteRunDataset(const PlanarWorld& world, const std::vector<RunSampl
                             const std::filesystem::path& root) {
   const auto cam = BumblebeeLikeCamera();
   dataset::Writer w(root, true);
-  dataset::CameraSensor s;
-  s.width = cam.width;
-  s.height = cam.height;
-  s.fu = cam.fx;
-  s.fv = cam.fy;
-  s.cu = cam.cx;
-  s.cv = cam.cy;
-  s.distortion = {0, 0, 0, 0};
-  s.rate_hz = 5;
-  s.T_BS = CameraOnBase(0).matrix();
+  dataset::CameraSensor s = dataset::RectifiedPinholeSensor(cam.width, cam.height, cam.fx, cam.fy,
+                                                            cam.cx, cam.cy, CameraOnBase(0), 5);
   w.WriteCameraSensor(0, s, "left camera, rectified");
   Eigen::Isometry3d right = CameraOnBase(0);
   right.translation() += right.linear().col(0) * cam.baseline_m;
