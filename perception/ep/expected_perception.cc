@@ -421,11 +421,8 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
     // No history survives a full restart.
     res->accumulated = cv::Mat::zeros(ComparisonGrid(camera_, step), CV_32F);
   }
-  const int unexpected_pixels = cv::countNonZero(res->unexpected);
-  res->unexpected_share = unexpected_pixels / n_pixels;
-  if (unexpected_pixels > 0) {  // labelling an empty mask still costs a pass over 4-byte labels
-    res->regions = LabelRegions(res->unexpected, res->disparity, camera_, T_base_cam0);
-  }
+  res->unexpected_share = cv::countNonZero(res->unexpected) / n_pixels;
+  res->regions = LabelRegions(res->unexpected, res->disparity, camera_, T_base_cam0);
   res->timings.plan_ms += MsSince(t0);
 
   // The state for the next frame. The result's images are never written again: the next
