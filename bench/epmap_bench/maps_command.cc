@@ -104,10 +104,7 @@ Prepared Prepare(const std::string& path, size_t max_frames) {
     chain.emplace(epmap::kinematics::UrdfChain::FromFile(*d.urdf));
     if (!chain->joint_names().empty()) {
       chain->BindJointOrder(d.joint_names);
-      std::ifstream in(*d.urdf);
-      std::stringstream xml;
-      xml << in.rdbuf();
-      p.limits = epmap::mobile_mapping::JointLimitsFromUrdf(xml.str(), chain->joint_names());
+      p.limits = epmap::mobile_mapping::JointLimitsFromUrdfFile(*d.urdf, chain->joint_names());
     }
   }
   epmap::mobile_mapping::KeyFrameSelector selector;

@@ -1,7 +1,9 @@
 #include "perception/mobile_mapping/joint_limits.h"
 
 #include <urdf_parser/urdf_parser.h>
+#include <fstream>
 #include <limits>
+#include <sstream>
 #include <stdexcept>
 
 namespace epmap::mobile_mapping {
@@ -23,6 +25,15 @@ std::vector<JointLimit> JointLimitsFromUrdf(const std::string& urdf_xml,
     out.push_back(lim);
   }
   return out;
+}
+
+std::vector<JointLimit> JointLimitsFromUrdfFile(const std::filesystem::path& urdf,
+                                                const std::vector<std::string>& joint_names) {
+  std::ifstream in(urdf);
+  if (!in) throw std::runtime_error("cannot read the URDF " + urdf.string());
+  std::stringstream xml;
+  xml << in.rdbuf();
+  return JointLimitsFromUrdf(xml.str(), joint_names);
 }
 
 }  // namespace epmap::mobile_mapping

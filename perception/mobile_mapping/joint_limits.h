@@ -13,5 +13,8 @@ namespace epmap::mobile_mapping {
 // std::runtime_error for an unreadable URDF or a joint it does not have.
 std::vector<JointLimit> JointLimitsFromUrdf(const std::string& urdf_xml,
                                             const std::vector<std::string>& joint_names);
+// The same, from a URDF file.
+std::vector<JointLimit> JointLimitsFromUrdfFile(const std::filesystem::path& urdf,
+                                                const std::vector<std::string>& joint_names);
 
 }  // namespace epmap::mobile_mapping

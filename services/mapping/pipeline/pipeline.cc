@@ -3,9 +3,7 @@
 #include <spdlog/spdlog.h>
 
 #include <cmath>
-#include <fstream>
 #include <opencv2/imgproc.hpp>
-#include <sstream>
 
 #include "perception/mobile_mapping/joint_limits.h"
 
@@ -71,10 +69,7 @@ Pipeline::Pipeline(const ServiceConfig& config, BoundedQueue<StereoFrame>& queue
                  chain_->root_link(), fmt::join(chain_->joint_names(), ", "));
     if (!chain_->joint_names().empty()) {
       // The maps refuse key frames whose joints (the pan) read outside these limits.
-      std::ifstream in(config.urdf);
-      std::stringstream xml;
-      xml << in.rdbuf();
-      joint_limits_ = mobile_mapping::JointLimitsFromUrdf(xml.str(), chain_->joint_names());
+      joint_limits_ = mobile_mapping::JointLimitsFromUrdfFile(config.urdf, chain_->joint_names());
     }
   }
   SetUpPoseSource();
