@@ -70,9 +70,12 @@ class Furnisher {
   }
 
   // Furniture, axis-aligned, footprint [x0, x1] x [y0, y1].
+  // Desks and chairs stand on legs, but what a planner and the maps see of them is their
+  // outline: it is listed with the furniture.
   void Desk(double x0, double y0, double x1, double y1) {
     const double top = 0.74;
     b_.AddBlock({x0, y0, top - 0.03}, {x1, y1, top}, SameMaterial(wood_));
+    AddFootprint(&world_->furniture_faces, {x0, y0, 0}, {x1, y1, top});
     for (double x : {x0 + 0.03, x1 - 0.08}) {
       for (double y : {y0 + 0.03, y1 - 0.08}) {
         b_.AddBlock({x, y, 0}, {x + 0.05, y + 0.05, top - 0.03}, SameMaterial(metal_));
@@ -87,6 +90,7 @@ class Furnisher {
   }
   void Chair(double x, double y) {
     b_.AddBlock({x - 0.22, y - 0.22, 0.42}, {x + 0.22, y + 0.22, 0.48}, SameMaterial(dark_));
+    AddFootprint(&world_->furniture_faces, {x - 0.22, y - 0.22, 0}, {x + 0.22, y + 0.22, 0.95});
     b_.AddBlock({x - 0.22, y + 0.17, 0.48}, {x + 0.22, y + 0.22, 0.95}, SameMaterial(dark_));
     b_.AddBlock({x - 0.03, y - 0.03, 0}, {x + 0.03, y + 0.03, 0.42}, SameMaterial(metal_));
   }
