@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
@@ -101,6 +102,18 @@ cv::Mat Upsample(const cv::Mat& grid_mask, const cv::Size& size, int step) {
   // Most frames flag nothing: a memset instead of a pass.
   if (cv::countNonZero(grid_mask) == 0) return cv::Mat::zeros(size, CV_8U);
   cv::Mat out(size, CV_8U);
+  if (step == 2 && size.width % 2 == 0) {  // the usual case: each byte written twice at once
+    for (int v = 0; v < size.height; v += 2) {
+      const uint8_t* __restrict src = grid_mask.ptr<uint8_t>(v / 2);
+      uint8_t* __restrict dst = out.ptr<uint8_t>(v);
+      for (int j = 0; j < size.width / 2; ++j) {
+        const uint16_t pair = static_cast<uint16_t>(src[j] * 0x0101U);
+        std::memcpy(dst + 2 * j, &pair, sizeof(pair));
+      }
+      if (v + 1 < size.height) std::memcpy(out.ptr<uint8_t>(v + 1), dst, size.width);
+    }
+    return out;
+  }
   for (int v = 0; v < size.height; v += step) {
     const uint8_t* src = grid_mask.ptr<uint8_t>(v / step);
     uint8_t* dst = out.ptr<uint8_t>(v);
@@ -364,7 +377,7 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
   // 3. Disparity update: SGBM where needed (or everywhere), fused into the prediction.
   t0 = Clock::now();
   if (mode == FrameMode::kPredicted) {
-    res->disparity = pred.disparity.clone();
+    res->disparity = pred.disparity;  // its own buffer (not the scratch): the result keeps it
     // Where the geometry is uncertain the search is not narrowed.
     const RoiStereoStats stats =
         stereo_.ComputeMasked(stereo_left, stereo_right, recompute, res->disparity,
@@ -393,16 +406,21 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
     cv::Mat unexpected = cmp.flagged.clone();
     if (params_.uncovered_margin_px > 0) {
       const float margin = static_cast<float>(params_.uncovered_margin_px);
+      bool removed = false;
       for (int i = 0; i < unexpected.rows; ++i) {
         uint8_t* u8 = unexpected.ptr<uint8_t>(i);
         const float* fresh = res->disparity.ptr<float>(i * step);
         const float* predicted = pred.geometry.ptr<float>(i * step);
         for (int j = 0; j < unexpected.cols; ++j) {
           // False for NaN.
-          if (u8[j] && fresh[j * step] < predicted[j * step] - margin) u8[j] = 0;
+          if (u8[j] && fresh[j * step] < predicted[j * step] - margin) {
+            u8[j] = 0;
+            removed = true;
+          }
         }
       }
-      unexpected = RemoveSpecks(unexpected, 0, grid_comparator_.min_region_area_px);
+      // What is left of a region may be a speck now (the comparator's mask has none).
+      if (removed) unexpected = RemoveSpecks(unexpected, 0, grid_comparator_.min_region_area_px);
     }
     res->unexpected = Upsample(unexpected, size, step);
     res->predicted_left = pred.image;
@@ -414,7 +432,7 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
     res->mean_attenuated = cmp.mean_attenuated;
     res->exposure_gain = cmp.gain;
     res->exposure_offset = cmp.offset;
-    res->hole_share = cv::countNonZero(pred.holes) / n_pixels;
+    res->hole_share = pred.hole_pixels / n_pixels;
     res->non_finite_rejected = pred.non_finite_rejected;
   } else {
     res->unexpected = cv::Mat::zeros(size, CV_8U);

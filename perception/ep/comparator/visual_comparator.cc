@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 #include <vector>
@@ -116,17 +117,14 @@ Comparison Compare(const cv::Mat& predicted, const cv::Mat& valid,
   if (params.compensate_exposure) {
     std::tie(out.gain, out.offset) = FitGainOffset(predicted, valid, actual);
   }
-  // exp(-alpha (C_-)^2), the attenuation of A (Sec. IV-A), by OpenCV's vectorised exp.
-  cv::Mat attenuation;
-  cv::multiply(predicted_accumulated, predicted_accumulated, attenuation, -params.alpha);
-  cv::exp(attenuation, attenuation);
   out.error.create(size, CV_32F);
   out.attenuated.create(size, CV_32F);
   out.accumulated.create(size, CV_32F);
   cv::Mat above(size, CV_8U);
-  // One pass for the rest:
+  // One pass for the rest, rows shared by two threads:
   //   E = |L_- - L| (Sec. IV-A), only where the prediction exists (0 elsewhere);
-  //   A = E exp(-alpha (C_-)^2) (Sec. IV-A), with the propagated history C_-;
+  //   A = E exp(-alpha (C_-)^2) (Sec. IV-A), with the propagated history C_- (the exponential
+  //   by OpenCV's vectorised exp, a row at a time);
   //   unexpected: A above the threshold (Sec. IV-A), specks removed below;
   //   C = (E + lambda C_-) / (lambda + 1) (Sec. IV-A); no history where nothing was predicted.
   //   Every pixel above the threshold (specks included: a speck removed from the output is
@@ -134,43 +132,58 @@ Comparison Compare(const cv::Mat& predicted, const cv::Mat& valid,
   //   instead: C = (w E + lambda C_-) / (w + lambda) (w = 1: the paper).
   const float gain = static_cast<float>(out.gain), offset = static_cast<float>(out.offset);
   const float threshold = static_cast<float>(params.threshold_grey);
+  const float minus_alpha = static_cast<float>(-params.alpha);
   const double lambda = params.lambda, w = std::min(params.unexpected_weight, 1.0);
   const float e_new = static_cast<float>(1.0 / (lambda + 1.0));
   const float c_new = static_cast<float>(lambda / (lambda + 1.0));
   const float e_unexpected = static_cast<float>(w / (w + lambda));
   const float c_unexpected = static_cast<float>(lambda / (w + lambda));
-  double sum_error = 0, sum_attenuated = 0;
-  for (int v = 0; v < size.height; ++v) {
-    const float* pred = predicted.ptr<float>(v);
-    const float* hist = predicted_accumulated.ptr<float>(v);
-    const float* att = attenuation.ptr<float>(v);
-    const uint8_t* ok = valid.ptr<uint8_t>(v);
-    const uint8_t* seen = actual.ptr<uint8_t>(v);
-    float* e_row = out.error.ptr<float>(v);
-    float* a_row = out.attenuated.ptr<float>(v);
-    float* c_row = out.accumulated.ptr<float>(v);
-    uint8_t* up = above.ptr<uint8_t>(v);
-    float row_error = 0, row_attenuated = 0;
-    int row_valid = 0;
-    for (int u = 0; u < size.width; ++u) {
-      const bool is_valid = ok[u] != 0;
-      const float e =
-          is_valid ? std::abs(pred[u] * gain + offset - static_cast<float>(seen[u])) : 0;
-      const float a = e * att[u];
-      const bool unexpected = a > threshold;
-      e_row[u] = e;
-      a_row[u] = a;
-      up[u] = unexpected ? 255 : 0;
-      const float c =
-          unexpected ? e * e_unexpected + hist[u] * c_unexpected : e * e_new + hist[u] * c_new;
-      c_row[u] = is_valid ? c : 0.0F;
-      row_error += e;  // 0 where invalid
-      row_attenuated += a;
-      row_valid += is_valid ? 1 : 0;
+  // Per-row sums, added in row order afterwards (the same total whatever the threads did).
+  std::vector<double> row_errors(static_cast<size_t>(size.height)),
+      row_attenuated_sums(row_errors.size());
+  std::vector<int> row_valid_counts(row_errors.size());
+  cv::parallel_for_(cv::Range(0, size.height), [&](const cv::Range& rows) {
+    cv::Mat attenuation(1, size.width, CV_32F);
+    float* att = attenuation.ptr<float>(0);
+    for (int v = rows.start; v < rows.end; ++v) {
+      const float* pred = predicted.ptr<float>(v);
+      const float* hist = predicted_accumulated.ptr<float>(v);
+      const uint8_t* ok = valid.ptr<uint8_t>(v);
+      const uint8_t* seen = actual.ptr<uint8_t>(v);
+      float* e_row = out.error.ptr<float>(v);
+      float* a_row = out.attenuated.ptr<float>(v);
+      float* c_row = out.accumulated.ptr<float>(v);
+      uint8_t* up = above.ptr<uint8_t>(v);
+      for (int u = 0; u < size.width; ++u) att[u] = minus_alpha * hist[u] * hist[u];
+      cv::exp(attenuation, attenuation);
+      float row_error = 0, row_attenuated = 0;
+      int row_valid = 0;
+      for (int u = 0; u < size.width; ++u) {
+        const bool is_valid = ok[u] != 0;
+        const float e =
+            is_valid ? std::abs(pred[u] * gain + offset - static_cast<float>(seen[u])) : 0;
+        const float a = e * att[u];
+        const bool unexpected = a > threshold;
+        e_row[u] = e;
+        a_row[u] = a;
+        up[u] = unexpected ? 255 : 0;
+        const float c =
+            unexpected ? e * e_unexpected + hist[u] * c_unexpected : e * e_new + hist[u] * c_new;
+        c_row[u] = is_valid ? c : 0.0F;
+        row_error += e;  // 0 where invalid
+        row_attenuated += a;
+        row_valid += is_valid ? 1 : 0;
+      }
+      row_errors[static_cast<size_t>(v)] = row_error;
+      row_attenuated_sums[static_cast<size_t>(v)] = row_attenuated;
+      row_valid_counts[static_cast<size_t>(v)] = row_valid;
     }
-    sum_error += row_error;
-    sum_attenuated += row_attenuated;
-    out.valid_pixels += row_valid;
+  });
+  double sum_error = 0, sum_attenuated = 0;
+  for (size_t v = 0; v < row_errors.size(); ++v) {
+    sum_error += row_errors[v];
+    sum_attenuated += row_attenuated_sums[v];
+    out.valid_pixels += row_valid_counts[v];
   }
   out.flagged =
       RemoveSpecks(above, params.open_radius_px, params.min_region_area_px, params.close_radius_px);

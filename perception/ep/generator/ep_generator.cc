@@ -128,9 +128,15 @@ void FillCracks(const PredictionParams& params, Splat* s) {
   };
   const float max_step = static_cast<float>(params.crack_max_step_px);
   const int H = s->H, W = s->W;
+  // The fills of each chunk of rows, kept by the chunk's first row (one vector per chunk, not
+  // per row: a vector per row grew by reallocation thousands of times a frame).
   std::vector<std::vector<Fill>> fills(static_cast<size_t>(H));
+  std::vector<cv::Range> chunks(static_cast<size_t>(H));
   cv::parallel_for_(cv::Range(1, H - 1), [&](const cv::Range& rows) {
     std::vector<int> empty(static_cast<size_t>(W));
+    std::vector<Fill>& out = fills[static_cast<size_t>(rows.start)];
+    chunks[static_cast<size_t>(rows.start)] = rows;
+    out.reserve(static_cast<size_t>(rows.end - rows.start) * static_cast<size_t>(W) / 8);
     for (int v = rows.start; v < rows.end; ++v) {
       const float* d_mid = s->disparity.ptr<float>(v);
       // The empty pixels of the row, listed without branches first: they lie scattered, and a
@@ -164,16 +170,25 @@ void FillCracks(const PredictionParams& params, Splat* s) {
         }
         if (n >= 3 && d_max - d_min <= max_step) {
           const float inv = 1.0F / static_cast<float>(n);
-          fills[static_cast<size_t>(v)].push_back(
-              {u, v, sx * inv, sy * inv, sz * inv,
-               static_cast<uint8_t>((2 * n_measured > n ? kMeasured : 0) | dynamic)});
+          out.push_back({u, v, sx * inv, sy * inv, sz * inv,
+                         static_cast<uint8_t>((2 * n_measured > n ? kMeasured : 0) | dynamic)});
         }
       }
     }
   });
-  for (const auto& row : fills) {
-    for (const Fill& f : row) s->Set(f.u, f.v, f.x, f.y, f.z, f.flags);
+  // Written once every fill is known (a fill must not feed its neighbours'); each writes its
+  // own pixel, so the chunks are written in parallel too.
+  std::vector<size_t> firsts;
+  for (size_t r = 0; r < chunks.size(); ++r) {
+    if (chunks[r].end > chunks[r].start) firsts.push_back(r);
   }
+  cv::parallel_for_(cv::Range(0, static_cast<int>(firsts.size())), [&](const cv::Range& range) {
+    for (int k = range.start; k < range.end; ++k) {
+      for (const Fill& f : fills[firsts[static_cast<size_t>(k)]]) {
+        s->Set(f.u, f.v, f.x, f.y, f.z, f.flags);
+      }
+    }
+  });
 }
 
 // One row of FillSmallHoles: each run of small-hole pixels is filled from the points beside it.
@@ -622,14 +637,14 @@ Prediction Predict(const MapState& previous, const Eigen::Isometry3d& T_cur_prev
 
   // The predicted disparity and the holes, at full resolution.
   Prediction out;
-  mem.disparity.create(H, W, CV_32F);
+  // D_- gets a buffer of its own each frame: the caller makes it the frame's map.
+  out.disparity.create(H, W, CV_32F);
   mem.geometry.create(H, W, CV_32F);
-  out.disparity = mem.disparity;
   out.geometry = mem.geometry;
   out.holes.create(H, W, CV_8U);
-  std::atomic<int> non_finite{0};
+  std::atomic<int> non_finite{0}, hole_count{0};
   cv::parallel_for_(cv::Range(0, H), [&](const cv::Range& rows) {
-    int broken = 0;
+    int broken = 0, holes = 0;
     for (int v = rows.start; v < rows.end; ++v) {
       float* pts = s.points.ptr<float>(v);
       const float* d_splat = s.disparity.ptr<float>(v);
@@ -649,6 +664,7 @@ Prediction Predict(const MapState& previous, const Eigen::Isometry3d& T_cur_prev
           hole[u] = 0;
         } else {
           if (d > 0) ++broken;  // a point was there but the arithmetic broke down
+          ++holes;
           geo[u] = kNaN;
           disp[u] = kNaN;
           hole[u] = 255;
@@ -659,8 +675,10 @@ Prediction Predict(const MapState& previous, const Eigen::Isometry3d& T_cur_prev
       }
     }
     non_finite += broken;
+    hole_count += holes;
   });
   out.non_finite_rejected = non_finite;
+  out.hole_pixels = hole_count;
   out.points = s.points;
   out.flags = s.flags;
 

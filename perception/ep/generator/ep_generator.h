@@ -83,15 +83,17 @@ struct Prediction {
   cv::Mat accumulated;          // C_-: CV_32F, 0 where invalid
   cv::Mat image_valid;          // CV_8U 255 where L_- and C_- exist
   int non_finite_rejected = 0;  // values that came out non-finite and were made holes
+  int hole_pixels = 0;          // pixels of `holes`
 };
 
 // Memory a caller may lend to Predict so that the same large buffers are not allocated (and
 // first touched, page by page) at every frame: about a tenth of a frame's work. Predict writes
-// into it; the Prediction's points, flags, disparity and geometry then live there (the points
+// into it; the Prediction's points, flags and geometry then live there (the points
 // alternate between two buffers, so that a state made of the last prediction can be read while
-// the next one is written). Give one scratch to one pipeline; never publish what lives in it.
+// the next one is written; the disparity has its own buffer, which the caller may keep). Give
+// one scratch to one pipeline; never publish what lives in it.
 struct PredictionScratch {
-  cv::Mat points[2], flags, splat_disparity, disparity, geometry;
+  cv::Mat points[2], flags, splat_disparity, geometry;
 };
 
 // T_cur_prev maps points of the previous camera frame into the current one
