@@ -216,10 +216,12 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
                                 std::to_string(size.height) + " (the camera's size)");
   }
   const cv::Mat left = ToGrey(left_in, "left");
-  const cv::Mat right = ToGrey(right_in, "right");
   // SGBM matches the images as the cameras delivered them (colour when they are colour, as
-  // full-frame SGBM would); the comparator works on brightness.
+  // full-frame SGBM would); the comparator works on brightness. The right image's brightness
+  // serves only the stereo check, or SGBM when the pair is not colour.
   const bool colour = left_in.type() == CV_8UC3 && right_in.type() == CV_8UC3;
+  const cv::Mat right =
+      colour && !params_.stereo_check.enabled ? right_in : ToGrey(right_in, "right");
   const cv::Mat& stereo_left = colour ? left_in : left;
   const cv::Mat& stereo_right = colour ? right_in : right;
   CheckPose(T_base_cam0);
@@ -516,12 +518,17 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
     // lives).
     const float margin = static_cast<float>(params_.history_reset_px);
     cv::Mat reset;
-    for (int i = 0; i < res->accumulated.rows; ++i) {
+    // Only the grid pixels inside the box of the uncertain pixels (often none at all).
+    const cv::Rect box = cv::boundingRect(uncertain);
+    const int i_end = std::min(res->accumulated.rows, (box.y + box.height + step - 1) / step);
+    const int j_begin = (box.x + step - 1) / step;
+    const int j_end = std::min(res->accumulated.cols, (box.x + box.width + step - 1) / step);
+    for (int i = (box.y + step - 1) / step; i < i_end; ++i) {
       const int v = i * step;
       const uint8_t* rec = uncertain.ptr<uint8_t>(v);
       const float* fresh = res->disparity.ptr<float>(v);
       const float* predicted_d = pred.geometry.ptr<float>(v);
-      for (int j = 0; j < res->accumulated.cols; ++j) {
+      for (int j = j_begin; j < j_end; ++j) {
         const int u = j * step;
         if (rec[u] && std::abs(fresh[u] - predicted_d[u]) > margin) {  // false for NaN
           if (reset.empty()) reset = res->accumulated.clone();  // the result's C stays as published

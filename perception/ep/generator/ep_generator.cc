@@ -601,8 +601,7 @@ Prediction Predict(const MapState& previous, const Eigen::Isometry3d& T_cur_prev
   mem.splat_disparity.create(H, W, CV_32F);
   s.points = points_buffer;
   s.flags = mem.flags;  // read only where a point landed; cleared at holes below
-  s.disparity = mem.splat_disparity;
-  s.disparity.setTo(0);
+  s.disparity = mem.splat_disparity;  // cleared by each thread for its own rows, below
   SplatTarget target;
   target.points = s.points.ptr<float>(0);  // all allocated whole: continuous
   target.flags = s.flags.ptr<uint8_t>(0);
@@ -622,8 +621,9 @@ Prediction Predict(const MapState& previous, const Eigen::Isometry3d& T_cur_prev
   std::vector<std::vector<Landing>> crossing(static_cast<size_t>(halves));
   cv::parallel_for_(cv::Range(0, halves), [&](const cv::Range& range) {
     for (int half = range.start; half < range.end; ++half) {
-      SplatRows(previous, motion, half * H / halves, (half + 1) * H / halves, target,
-                &crossing[static_cast<size_t>(half)]);
+      const int row_begin = half * H / halves, row_end = (half + 1) * H / halves;
+      s.disparity.rowRange(row_begin, row_end).setTo(0);
+      SplatRows(previous, motion, row_begin, row_end, target, &crossing[static_cast<size_t>(half)]);
     }
   });
   for (const auto& crossers : crossing) {
