@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <opencv2/core/utility.hpp>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 
@@ -60,20 +61,29 @@ std::vector<RoiBox> RoiStereo::PlanBoxes(const cv::Mat& mask) const {
                     t.height + 2 * half) &
            image;
   };
-  // Tight boxes of each band's connected pieces.
-  std::vector<RoiBox> boxes;
-  cv::Mat labels, stats, centroids;
-  for (int y0 = 0; y0 < mask.rows; y0 += params_.band_rows) {
-    const cv::Rect band(0, y0, mask.cols, std::min(params_.band_rows, mask.rows - y0));
-    if (cv::countNonZero(mask(band)) == 0) continue;  // most bands: labelling costs far more
-    const int n = cv::connectedComponentsWithStats(mask(band), labels, stats, centroids, 8, CV_32S);
-    for (int i = 1; i < n; ++i) {
-      const cv::Rect target(
-          stats.at<int>(i, cv::CC_STAT_LEFT), y0 + stats.at<int>(i, cv::CC_STAT_TOP),
-          stats.at<int>(i, cv::CC_STAT_WIDTH), stats.at<int>(i, cv::CC_STAT_HEIGHT));
-      boxes.push_back({pad(target), target});
+  // Tight boxes of each band's connected pieces. The bands are labelled on two threads, each
+  // band by one (OpenCV's labelling, called inside a parallel region, does not dispatch threads
+  // of its own: for a band of a few rows that dispatch cost more than the labelling).
+  const int n_bands = (mask.rows + params_.band_rows - 1) / params_.band_rows;
+  std::vector<std::vector<RoiBox>> band_boxes(static_cast<size_t>(n_bands));
+  cv::parallel_for_(cv::Range(0, n_bands), [&](const cv::Range& range) {
+    cv::Mat labels, stats, centroids;
+    for (int b = range.start; b < range.end; ++b) {
+      const int y0 = b * params_.band_rows;
+      const cv::Rect band(0, y0, mask.cols, std::min(params_.band_rows, mask.rows - y0));
+      if (cv::countNonZero(mask(band)) == 0) continue;  // most bands: labelling costs far more
+      const int n =
+          cv::connectedComponentsWithStats(mask(band), labels, stats, centroids, 8, CV_32S);
+      for (int i = 1; i < n; ++i) {
+        const cv::Rect target(
+            stats.at<int>(i, cv::CC_STAT_LEFT), y0 + stats.at<int>(i, cv::CC_STAT_TOP),
+            stats.at<int>(i, cv::CC_STAT_WIDTH), stats.at<int>(i, cv::CC_STAT_HEIGHT));
+        band_boxes[static_cast<size_t>(b)].push_back({pad(target), target});
+      }
     }
-  }
+  });
+  std::vector<RoiBox> boxes;  // in band order, whatever thread labelled which band
+  for (const auto& in_band : band_boxes) boxes.insert(boxes.end(), in_band.begin(), in_band.end());
   // Greedy merging while some pair costs no more together than apart.
   bool merged = true;
   while (merged) {
