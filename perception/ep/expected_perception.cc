@@ -276,36 +276,38 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
   auto t0 = Clock::now();
   cv::Mat recompute;
   if (res->compared) {
-    if (cv::countNonZero(cmp.flagged) == 0) {  // nothing unexpected (most frames): no dilation
-      recompute = cv::Mat::zeros(size, CV_8U);
-    } else if (params_.recompute_margin_px > 0) {
-      const int k = 2 * params_.recompute_margin_px + 1;
-      cv::dilate(flagged, recompute, cv::getStructuringElement(cv::MORPH_RECT, {k, k}));
-    } else {
-      recompute = flagged.clone();
-    }
-    // Where the geometry itself is in question (something moved, or the pair disagrees), SGBM
-    // searches the full range; elsewhere the prediction says what disparities to expect.
-    uncertain = recompute.clone();
-    recompute |= pred.holes;
-    if (!res->stereo_inconsistent.empty()) {
-      recompute |= res->stereo_inconsistent;
-      uncertain |= res->stereo_inconsistent;
-    }
+    // Where the geometry itself is in question, SGBM searches the full range; elsewhere the
+    // prediction says what disparities to expect. In question: what the comparator flagged
+    // (its edges change too: grown by the margin) and, with remeasure_dynamic, where the
+    // prediction came from points that moved on their own last frame (the map's geometry there
+    // is not to be trusted whether or not E notices: the thing may have left a low-texture
+    // place), grown alike: one dilation of the union.
+    cv::Mat dynamic;
+    bool any_dynamic = false;
     if (params_.remeasure_dynamic) {
-      // Where something moved on its own last frame, the map's geometry is not to be trusted:
-      // re-measured whether or not E notices (the thing may have left a low-texture place).
-      cv::Mat dynamic;
       cv::bitwise_and(pred.flags, cv::Scalar(kDynamic), dynamic);
-      if (cv::countNonZero(dynamic) > 0) {
-        if (params_.recompute_margin_px > 0) {
-          const int k = 2 * params_.recompute_margin_px + 1;
-          cv::dilate(dynamic, dynamic, cv::getStructuringElement(cv::MORPH_RECT, {k, k}));
-        }
-        recompute.setTo(255, dynamic);
-        uncertain.setTo(255, dynamic);
+      any_dynamic = cv::countNonZero(dynamic) > 0;
+    }
+    const bool any_flagged = cv::countNonZero(cmp.flagged) > 0;
+    if (!any_flagged && !any_dynamic) {  // most frames: no dilation
+      uncertain = cv::Mat::zeros(size, CV_8U);
+    } else {
+      cv::Mat questioned;
+      if (any_dynamic) {
+        cv::compare(dynamic, 0, questioned, cv::CMP_GT);  // 255 where dynamic
+        if (any_flagged) questioned |= flagged;
+      } else {
+        questioned = flagged;
+      }
+      if (params_.recompute_margin_px > 0) {
+        const int k = 2 * params_.recompute_margin_px + 1;
+        cv::dilate(questioned, uncertain, cv::getStructuringElement(cv::MORPH_RECT, {k, k}));
+      } else {
+        uncertain = questioned.clone();
       }
     }
+    if (!res->stereo_inconsistent.empty()) uncertain |= res->stereo_inconsistent;
+    cv::bitwise_or(uncertain, pred.holes, recompute);
     // New content along the borders is recomputed once the strip it forms is thick enough to
     // be worth its SGBM box (the box's padding would dwarf a strip of a pixel or two); until
     // then it stays unknown (without points: a hole again next frame, and the strip grows).

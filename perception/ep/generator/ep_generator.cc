@@ -256,7 +256,9 @@ void FillSmallHoles(const PredictionParams& params, Splat* s) {
   cv::Mat large;
   cv::morphologyEx(holes, large, cv::MORPH_OPEN,
                    cv::getStructuringElement(cv::MORPH_RECT, cv::Size(n + 1, n + 1)));
-  cv::Mat small = holes & ~large;
+  // Small holes: holes the opening removed (holes - large, large being inside holes).
+  cv::Mat small;
+  cv::subtract(holes, large, small);
   // Holes near the border may be the start of a newly visible strip: SGBM's. Near the border
   // (within `margin`), a run is filled only if it is short (at most n), does not reach the left
   // or right edge, and no pixel of it is joined to the top or bottom edge by a column of holes.
