@@ -464,21 +464,13 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
   if (predicted && state_.flags.data == pred.flags.data) state_.flags = cv::Mat(size, CV_8U);
   const float fb = static_cast<float>(camera_.fx * camera_.baseline_m);
   cv::parallel_for_(cv::Range(0, size.height), [&](const cv::Range& rows) {
-    std::vector<float> fill(static_cast<size_t>(size.width));
     const float nan = std::numeric_limits<float>::quiet_NaN();
     for (int v = rows.start; v < rows.end; ++v) {
       auto* p = state_.points.ptr<cv::Vec3f>(v);
       const float* fresh = res->disparity.ptr<float>(v);
-      // The row's fill of SGBM's gaps, made only when a pixel of the row needs it (on predicted
-      // frames most rows have none).
-      bool filled = false;
-      const auto fill_at = [&](int u) {
-        if (!filled) {
-          FillUnknownDisparityRow(fresh, fill.data(), size.width);
-          filled = true;
-        }
-        return fill[static_cast<size_t>(u)];
-      };
+      // The fill of SGBM's gaps, only where a pixel needs it (on predicted frames few do).
+      RowGap gap;
+      const auto fill_at = [&](int u) { return FilledDisparityAt(fresh, size.width, u, &gap); };
       const uint8_t* rec = res->recompute.ptr<uint8_t>(v);
       const uint8_t* moved = res->unexpected.ptr<uint8_t>(v);
       const uint8_t* carried = predicted ? pred.flags.ptr<uint8_t>(v) : nullptr;

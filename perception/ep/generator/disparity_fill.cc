@@ -9,6 +9,8 @@ namespace epmap::ep {
 
 namespace {
 constexpr float kSameSurfacePx = 2.0F;  // ends closer than this belong to one surface
+
+bool Known(float d) { return std::isfinite(d) && d > 0.0F; }
 }  // namespace
 
 void FillUnknownDisparityRow(const float* in, float* row, int width) {
@@ -41,6 +43,27 @@ void FillUnknownDisparityRow(const float* in, float* row, int width) {
     }
     std::fill(row + begin, row + c, value);
   }
+}
+
+float FilledDisparityAt(const float* row, int width, int u, RowGap* gap) {
+  if (Known(row[u])) return row[u];
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  if (!(u >= gap->begin && u < gap->end)) {
+    int begin = u, end = u + 1;
+    while (begin > 0 && !Known(row[begin - 1])) --begin;
+    while (end < width && !Known(row[end])) ++end;
+    *gap = {begin, end, begin > 0 ? row[begin - 1] : nan, end < width ? row[end] : nan};
+  }
+  // As FillUnknownDisparityRow, operation for operation.
+  const float left = gap->left, right = gap->right;
+  if (std::isfinite(left) && std::isfinite(right) && std::abs(left - right) <= kSameSurfacePx) {
+    const float step = (right - left) / static_cast<float>(gap->end - gap->begin + 1);
+    return left + step * static_cast<float>(u - gap->begin + 1);
+  }
+  if (std::isfinite(left) && std::isfinite(right)) return std::min(left, right);
+  if (std::isfinite(left)) return left;
+  if (std::isfinite(right)) return right;
+  return nan;
 }
 
 cv::Mat FillUnknownDisparity(const cv::Mat& disparity) {

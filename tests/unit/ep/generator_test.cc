@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <limits>
+#include <vector>
 #include <opencv2/imgproc.hpp>
 
 #include "perception/ep/generator/disparity_fill.h"
@@ -151,6 +152,41 @@ TEST(DisparityFill, InterpolatesOneSurfaceAndTakesTheBackgroundAtEdges) {
   EXPECT_FLOAT_EQ(f.at<float>(1, 0), 5);   // only one side known
   EXPECT_FLOAT_EQ(f.at<float>(1, 2), 5);
   EXPECT_FLOAT_EQ(f.at<float>(1, 6), 25);
+}
+
+TEST(DisparityFill, OnePixelAtATimeGivesTheRowsValuesToTheBit) {
+  // Random rows with gaps of every length, one surface or an edge across them, gaps at both
+  // ends, rows with nothing known; pixels asked for in order and out of order.
+  cv::RNG rng(7);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const int width = 97;
+  for (int trial = 0; trial < 300; ++trial) {
+    std::vector<float> row(width), filled(width);
+    const double known_share = trial % 10 == 0 ? 0.0 : rng.uniform(0.05, 0.95);
+    float level = rng.uniform(1.0F, 60.0F);
+    for (int u = 0; u < width; ++u) {
+      if (rng.uniform(0.0, 1.0) < 0.05) level = rng.uniform(1.0F, 60.0F);  // an edge
+      const double r = rng.uniform(0.0, 1.0);
+      row[u] = r < known_share ? level + rng.uniform(-1.5F, 1.5F) : (r < 0.9 ? nan : -1.0F);
+    }
+    ep::FillUnknownDisparityRow(row.data(), filled.data(), width);
+    ep::RowGap gap;
+    for (int u = 0; u < width; ++u) {
+      const float one = ep::FilledDisparityAt(row.data(), width, u, &gap);
+      if (std::isnan(filled[u])) {
+        EXPECT_TRUE(std::isnan(one)) << "trial " << trial << " u " << u;
+      } else {
+        EXPECT_EQ(one, filled[u]) << "trial " << trial << " u " << u;
+      }
+    }
+    ep::RowGap fresh_gap;
+    for (int u = width - 1; u >= 0; u -= 3) {
+      const float one = ep::FilledDisparityAt(row.data(), width, u, &fresh_gap);
+      if (!std::isnan(filled[u])) {
+        EXPECT_EQ(one, filled[u]);
+      }
+    }
+  }
 }
 
 }  // namespace
