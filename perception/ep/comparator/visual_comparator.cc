@@ -75,16 +75,29 @@ cv::Mat RemoveSpecks(const cv::Mat& mask, int open_radius_px, int min_area_px,
   } else {
     out = mask.clone();
   }
-  // Nothing left (most frames): no closing, no labelling pass over 4-byte labels.
-  if (cv::countNonZero(out) == 0) return out;
+  // Closing and labelling only inside the box of what is left, grown by what the closing can
+  // reach (all else is 0 before and after): usually a small part of the image. Nothing left
+  // (most frames): nothing to do.
+  const cv::Rect left_box = cv::boundingRect(out);
+  if (left_box.empty()) return out;
+  const int reach = 2 * std::max(close_radius_px, 0) + 1;
+  const cv::Rect roi =
+      cv::Rect(left_box.x - reach, left_box.y - reach, left_box.width + 2 * reach,
+               left_box.height + 2 * reach) &
+      cv::Rect(0, 0, out.cols, out.rows);
+  cv::Mat part = out(roi);
   if (close_radius_px > 0) {
     const cv::Mat k = cv::getStructuringElement(
         cv::MORPH_RECT, cv::Size(2 * close_radius_px + 1, 2 * close_radius_px + 1));
-    cv::morphologyEx(out, out, cv::MORPH_CLOSE, k);
+    // BORDER_ISOLATED: the part is closed as an image of its own (outside it all is 0 anyway).
+    cv::Mat closed;
+    cv::morphologyEx(part, closed, cv::MORPH_CLOSE, k, cv::Point(-1, -1), 1,
+                     cv::BORDER_CONSTANT | cv::BORDER_ISOLATED);
+    closed.copyTo(part);
   }
   if (min_area_px > 1) {
     cv::Mat labels, stats, centroids;
-    const int n = cv::connectedComponentsWithStats(out, labels, stats, centroids, 8, CV_32S);
+    const int n = cv::connectedComponentsWithStats(part, labels, stats, centroids, 8, CV_32S);
     std::vector<uint8_t> keep(static_cast<size_t>(n), 0);
     bool any_dropped = false;
     for (int i = 1; i < n; ++i) {
@@ -92,10 +105,10 @@ cv::Mat RemoveSpecks(const cv::Mat& mask, int open_radius_px, int min_area_px,
       any_dropped |= keep[static_cast<size_t>(i)] == 0;
     }
     if (any_dropped) {
-      for (int v = 0; v < out.rows; ++v) {
+      for (int v = 0; v < part.rows; ++v) {
         const int* l = labels.ptr<int>(v);
-        uint8_t* o = out.ptr<uint8_t>(v);
-        for (int u = 0; u < out.cols; ++u) o[u] = keep[static_cast<size_t>(l[u])];
+        uint8_t* o = part.ptr<uint8_t>(v);
+        for (int u = 0; u < part.cols; ++u) o[u] = keep[static_cast<size_t>(l[u])];
       }
     }
   }
