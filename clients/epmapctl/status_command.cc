@@ -38,6 +38,13 @@ void PrintHuman(const epmap::v1::ServiceStatus& s) {
       std::printf("  %-44s %llu\n", c.reason().c_str(), static_cast<unsigned long long>(c.count()));
     }
   }
+  if (s.key_frames_refused_by_reason_size()) {
+    std::printf("key frames the maps refused (%llu; their frames were processed):\n",
+                static_cast<unsigned long long>(s.key_frames_refused()));
+    for (const auto& c : s.key_frames_refused_by_reason()) {
+      std::printf("  %-44s %llu\n", c.reason().c_str(), static_cast<unsigned long long>(c.count()));
+    }
+  }
   if (s.queue_drops_by_reason_size()) {
     std::printf("queue drops:\n");
     for (const auto& c : s.queue_drops_by_reason()) {

@@ -41,6 +41,8 @@ grpc::Status MapServiceImpl::GetStatus(grpc::ServerContext*, const v1::GetStatus
   out->set_frames_processed(pipeline.frames_processed());
   out->set_frames_rejected(counters.rejected.Total());
   AddCounters(counters.rejected.Snapshot(), out->mutable_rejected_by_reason());
+  out->set_key_frames_refused(counters.key_frames_refused.Total());
+  AddCounters(counters.key_frames_refused.Snapshot(), out->mutable_key_frames_refused_by_reason());
   out->set_queue_dropped(counters.queue_drops.Total());
   AddCounters(counters.queue_drops.Snapshot(), out->mutable_queue_drops_by_reason());
   out->set_queue_depth(static_cast<uint32_t>(service_.queue().size()));

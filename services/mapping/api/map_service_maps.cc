@@ -41,8 +41,8 @@ grpc::Status LatestMaps(MappingService& service,
   const auto snapshot = service.snapshots().Latest();
   if (!snapshot || !snapshot->maps) {
     return {grpc::StatusCode::FAILED_PRECONDITION,
-            "no map yet: no key frame has been accepted (see GetStatus rejected_by_reason "
-            "maps:* for refused ones)"};
+            "no map yet: no key frame has been accepted (see GetStatus "
+            "key_frames_refused_by_reason for refused ones)"};
   }
   *maps = snapshot->maps;
   return grpc::Status::OK;

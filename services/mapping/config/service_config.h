@@ -71,7 +71,7 @@ struct MapsSettings {
   // is seen panning at a stop, then 2: only panning stops make views).
   int view_min_key_frames = 0;
   // Key frames whose odometry moved more than this since the last accepted one are refused
-  // (a glitch, counted in rejected_by_reason as maps:odometry_jump).
+  // (a glitch, counted in GetStatus key_frames_refused_by_reason as maps:odometry_jump).
   double max_odometry_step_m = 2.0;
   double max_odometry_step_rad = 1.6;
   double max_odometry_speed_mps = 3.0;

@@ -37,7 +37,7 @@ void Pipeline::RunMaps(const StereoFrame& frame, const stereo::Rectifier& rectif
   snapshot.maps = maps_;  // unchanged until a key frame is accepted
   if (!chain_) {
     // Without the chain from the base to the camera the points cannot be placed on the floor.
-    counters_.rejected.Increment("maps:no_urdf");
+    counters_.key_frames_refused.Increment("maps:no_urdf");
     return;
   }
   const auto wait = std::chrono::nanoseconds(config_.joints_wait_ns);
@@ -47,14 +47,14 @@ void Pipeline::RunMaps(const StereoFrame& frame, const stereo::Rectifier& rectif
     auto q = sensors_.JointsAt(frame.stamp_ns, chain_->joint_names(), config_.joints_max_gap_ns,
                                wait, &reason);
     if (!q) {
-      counters_.rejected.Increment("maps:no_joints");
+      counters_.key_frames_refused.Increment("maps:no_joints");
       return;
     }
     joints = std::move(*q);
   }
   const auto odom = sensors_.OdometryAt(frame.stamp_ns, config_.joints_max_gap_ns, wait, &reason);
   if (!odom) {
-    counters_.rejected.Increment("maps:no_odometry");
+    counters_.key_frames_refused.Increment("maps:no_odometry");
     return;
   }
 
@@ -66,7 +66,7 @@ void Pipeline::RunMaps(const StereoFrame& frame, const stereo::Rectifier& rectif
   key_frame.T_base_cam = chain_->Cam0Pose(joints) * RawToRectified(rectifier);
   key_frame.joint_positions = joints;
   if (!std::isfinite(odom->x) || !std::isfinite(odom->y) || !std::isfinite(odom->theta)) {
-    counters_.rejected.Increment("maps:odometry_not_finite");
+    counters_.key_frames_refused.Increment("maps:odometry_not_finite");
     return;
   }
 
@@ -93,13 +93,13 @@ void Pipeline::RunMaps(const StereoFrame& frame, const stereo::Rectifier& rectif
     report = mapper_->AddKeyFrame(key_frame);
   } catch (const std::exception& e) {
     // An algorithm failure on one key frame must not end the maps: counted, frame skipped.
-    counters_.rejected.Increment("maps:exception");
+    counters_.key_frames_refused.Increment("maps:exception");
     spdlog::warn("maps: key frame {} failed: {}", frame.stamp_ns, e.what());
     return;
   }
   if (!report.accepted) {
     const auto& r = report.rejection;
-    counters_.rejected.Increment("maps:" + (r ? r->reason : std::string("refused")));
+    counters_.key_frames_refused.Increment("maps:" + (r ? r->reason : std::string("refused")));
     spdlog::warn("maps: key frame {} refused: {}", frame.stamp_ns,
                  r ? r->message : std::string("no reason given"));
     return;

@@ -99,10 +99,8 @@ TEST(MapsE2E, BuildingRunGivesMapsNearTheTrueWalls) {
   EXPECT_EQ(status.mode(), "mobile-base");
   const uint64_t key_frames = testing::Epmapd::Count(status.events(), "maps_key_frames");
   EXPECT_GE(key_frames, 10u) << status.DebugString();
-  for (const auto& c : status.rejected_by_reason()) {
-    // Good input: no key frame refused by the maps.
-    EXPECT_NE(c.reason().rfind("maps:", 0), 0u) << c.reason() << " " << c.count();
-  }
+  // Good input: no key frame refused by the maps.
+  EXPECT_EQ(status.key_frames_refused(), 0u) << status.DebugString();
 
   // Ground truth in the world frame of the maps (the start pose = the odometry frame).
   const auto gt0 = dataset::InterpolatePlanar(data.gt_base_pose, data.odometry.front().stamp_ns);
@@ -358,8 +356,9 @@ TEST_F(MapsFromPublishedFrames, BadInputIsCountedAndTheMapsStayIntact) {
   const auto status = epmapd.WaitStatus(
       [&](const v1::ServiceStatus& s) {
         return testing::Epmapd::Count(s.events(), "maps_key_frames") +
-                   testing::Epmapd::Count(s.rejected_by_reason(), "maps:odometry_jump") +
-                   testing::Epmapd::Count(s.rejected_by_reason(), "maps:joint_out_of_range") >=
+                   testing::Epmapd::Count(s.key_frames_refused_by_reason(), "maps:odometry_jump") +
+                   testing::Epmapd::Count(s.key_frames_refused_by_reason(),
+                                          "maps:joint_out_of_range") >=
                static_cast<uint64_t>(good + 2);
       },
       std::chrono::seconds(30));
@@ -367,9 +366,15 @@ TEST_F(MapsFromPublishedFrames, BadInputIsCountedAndTheMapsStayIntact) {
     return testing::Epmapd::Count(counters, reason);
   };
   EXPECT_EQ(status.mode(), "mobile-base");
-  EXPECT_EQ(count(status.rejected_by_reason(), "maps:odometry_jump"), 1u) << status.DebugString();
-  EXPECT_EQ(count(status.rejected_by_reason(), "maps:joint_out_of_range"), 1u)
+  EXPECT_EQ(count(status.key_frames_refused_by_reason(), "maps:odometry_jump"), 1u)
       << status.DebugString();
+  EXPECT_EQ(count(status.key_frames_refused_by_reason(), "maps:joint_out_of_range"), 1u)
+      << status.DebugString();
+  EXPECT_EQ(status.key_frames_refused(), 2u) << status.DebugString();
+  // The frames themselves were processed: a refused key frame is not a rejected frame.
+  for (const auto& c : status.rejected_by_reason()) {
+    EXPECT_NE(c.reason().rfind("maps:", 0), 0u) << c.reason() << " " << c.count();
+  }
   EXPECT_GE(count(status.rejected_by_reason(), "odometry:stamp_not_increasing"), 1u)
       << status.DebugString();
   EXPECT_EQ(count(status.events(), "maps_key_frame_without_edges"), 1u) << status.DebugString();
