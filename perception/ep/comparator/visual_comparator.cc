@@ -81,10 +81,9 @@ cv::Mat RemoveSpecks(const cv::Mat& mask, int open_radius_px, int min_area_px,
   const cv::Rect left_box = cv::boundingRect(out);
   if (left_box.empty()) return out;
   const int reach = 2 * std::max(close_radius_px, 0) + 1;
-  const cv::Rect roi =
-      cv::Rect(left_box.x - reach, left_box.y - reach, left_box.width + 2 * reach,
-               left_box.height + 2 * reach) &
-      cv::Rect(0, 0, out.cols, out.rows);
+  const cv::Rect roi = cv::Rect(left_box.x - reach, left_box.y - reach, left_box.width + 2 * reach,
+                                left_box.height + 2 * reach) &
+                       cv::Rect(0, 0, out.cols, out.rows);
   cv::Mat part = out(roi);
   if (close_radius_px > 0) {
     const cv::Mat k = cv::getStructuringElement(

@@ -10,7 +10,9 @@ namespace epmap::ep {
 namespace {
 constexpr float kSameSurfacePx = 2.0F;  // ends closer than this belong to one surface
 
-bool Known(float d) { return std::isfinite(d) && d > 0.0F; }
+bool Known(float d) {
+  return std::isfinite(d) && d > 0.0F;
+}
 }  // namespace
 
 void FillUnknownDisparityRow(const float* in, float* row, int width) {

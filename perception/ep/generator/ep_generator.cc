@@ -625,7 +625,7 @@ Prediction Predict(const MapState& previous, const Eigen::Isometry3d& T_cur_prev
   mem.flags.create(H, W, CV_8U);
   mem.splat_disparity.create(H, W, CV_32F);
   s.points = points_buffer;
-  s.flags = mem.flags;  // read only where a point landed; cleared at holes below
+  s.flags = mem.flags;                // read only where a point landed; cleared at holes below
   s.disparity = mem.splat_disparity;  // cleared by each thread for its own rows, below
   SplatTarget target;
   target.points = s.points.ptr<float>(0);  // all allocated whole: continuous

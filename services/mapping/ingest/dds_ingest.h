@@ -24,11 +24,11 @@
 namespace epmap::mapping {
 
 struct IngestCounters {
-  CounterSet rejected;        // "<topic>:<reason>" for every refused sample or pair
+  CounterSet rejected;  // "<topic>:<reason>" for every refused sample or pair
   // "maps:<reason>" for every key frame the maps of mobile-base mode refused: the frame itself
   // was processed (its disparity is served), so it is not a rejected frame.
   CounterSet key_frames_refused;
-  CounterSet queue_drops;     // "<reason>" for every frame dropped between ingest and pipeline
+  CounterSet queue_drops;  // "<reason>" for every frame dropped between ingest and pipeline
   std::atomic<uint64_t> frames_assembled{0};
 };
 

@@ -2,8 +2,8 @@
 
 #include <cmath>
 #include <limits>
-#include <vector>
 #include <opencv2/imgproc.hpp>
+#include <vector>
 
 #include "perception/ep/generator/disparity_fill.h"
 #include "perception/ep/generator/ep_generator.h"
