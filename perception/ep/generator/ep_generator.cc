@@ -322,55 +322,33 @@ struct SplatTarget {
   float* disparity;
 };
 
-// What the landing needs, by value: kept in locals (registers) by the loops that land points.
-// (A store through the flags, uint8_t, may alias any memory: read through a reference, the
-// motion and the target were reloaded after every landing.)
-struct LandingContext {
-  float* points;
-  uint8_t* flags;
-  float* disparity;
-  int W;
-  float fx, fy, cx, cy, max_step;
-
-  LandingContext(const SplatMotion& m, const SplatTarget& t)
-      : points(t.points),
-        flags(t.flags),
-        disparity(t.disparity),
-        W(m.W),
-        fx(m.fx),
-        fy(m.fy),
-        cx(m.cx),
-        cy(m.cy),
-        max_step(m.max_step) {}
-};
-
 // Writes a point if it beats the pixel's current one: between two surfaces the nearer point,
 // on one surface the point nearer to the pixel centre. Scalar arguments, not a Landing: built
 // in memory, the struct kept the hot loop's values out of registers.
-inline void LandAt(const LandingContext c, int ui, int vi, float x, float y, float z, float d,
-                   float du, float dv, uint8_t flags) {
-  const size_t idx = static_cast<size_t>(vi) * static_cast<size_t>(c.W) + static_cast<size_t>(ui);
-  const float d_old = c.disparity[idx];  // 0 when empty
-  float* dst = c.points + 3 * idx;
+inline void LandAt(const SplatMotion& m, const SplatTarget& t, int ui, int vi, float x, float y,
+                   float z, float d, float du, float dv, uint8_t flags) {
+  const size_t idx = static_cast<size_t>(vi) * static_cast<size_t>(m.W) + static_cast<size_t>(ui);
+  const float d_old = t.disparity[idx];  // 0 when empty
+  float* dst = t.points + 3 * idx;
   if (d_old != 0.0F) {
-    if (std::abs(d - d_old) > c.max_step) {
+    if (std::abs(d - d_old) > m.max_step) {
       if (d < d_old) return;  // behind the current surface
     } else {
       const float inv = 1.0F / dst[2];
-      const float du_old = c.fx * dst[0] * inv + c.cx - static_cast<float>(ui);
-      const float dv_old = c.fy * dst[1] * inv + c.cy - static_cast<float>(vi);
+      const float du_old = m.fx * dst[0] * inv + m.cx - static_cast<float>(ui);
+      const float dv_old = m.fy * dst[1] * inv + m.cy - static_cast<float>(vi);
       if (du * du + dv * dv >= du_old * du_old + dv_old * dv_old) return;
     }
   }
   dst[0] = x;
   dst[1] = y;
   dst[2] = z;
-  c.flags[idx] = flags;
-  c.disparity[idx] = d;
+  t.flags[idx] = flags;
+  t.disparity[idx] = d;
 }
 
-inline void Land(const LandingContext c, const Landing& l) {
-  LandAt(c, l.ui, l.vi, l.x, l.y, l.z, l.d, l.du, l.dv, l.flags);
+inline void Land(const SplatMotion& m, const Landing& l, const SplatTarget& t) {
+  LandAt(m, t, l.ui, l.vi, l.x, l.y, l.z, l.d, l.du, l.dv, l.flags);
 }
 
 // One row of moved points, projected: coordinates in the new camera frame, disparity, and the
@@ -442,7 +420,6 @@ struct RowProjection {
 void SplatRows(const MapState& previous, const SplatMotion& motion, int row_begin, int row_end,
                const SplatTarget& target, std::vector<Landing>* crossers) {
   const int W = motion.W;
-  const LandingContext context(motion, target);
   RowProjection row(W);
   for (int v = row_begin; v < row_end; ++v) {
     const uint8_t* m = previous.flags.ptr<uint8_t>(v);
@@ -455,7 +432,7 @@ void SplatRows(const MapState& previous, const SplatMotion& motion, int row_begi
       const int ui = static_cast<int>(u1 + 0.5F), vi = static_cast<int>(v1 + 0.5F);
       const float du = u1 - static_cast<float>(ui), dv = v1 - static_cast<float>(vi);
       if (vi >= row_begin && vi < row_end) {
-        LandAt(context, ui, vi, xs[u], ys[u], zs[u], ds[u], du, dv, m[u]);
+        LandAt(motion, target, ui, vi, xs[u], ys[u], zs[u], ds[u], du, dv, m[u]);
       } else {
         crossers->push_back({ui, vi, xs[u], ys[u], zs[u], ds[u], du, dv, m[u]});
       }
@@ -651,9 +628,8 @@ Prediction Predict(const MapState& previous, const Eigen::Isometry3d& T_cur_prev
       SplatRows(previous, motion, row_begin, row_end, target, &crossing[static_cast<size_t>(half)]);
     }
   });
-  const LandingContext context(motion, target);
   for (const auto& crossers : crossing) {
-    for (const Landing& l : crossers) Land(context, l);
+    for (const Landing& l : crossers) Land(motion, l, target);
   }
   // ... and an empty pixel takes the best point held by a neighbour whose projection lies
   // within splat_radius_px of its own centre (a footprint of 1.5 px).
