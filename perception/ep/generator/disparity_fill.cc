@@ -15,38 +15,6 @@ bool Known(float d) {
 }
 }  // namespace
 
-void FillUnknownDisparityRow(const float* in, float* row, int width) {
-  const float nan = std::numeric_limits<float>::quiet_NaN();
-  std::copy(in, in + width, row);
-  const auto valid = [&](int c) { return std::isfinite(row[c]) && row[c] > 0.0F; };
-  int c = 0;
-  while (c < width) {
-    if (valid(c)) {
-      ++c;
-      continue;
-    }
-    const int begin = c;
-    while (c < width && !valid(c)) ++c;
-    const float left = begin > 0 ? row[begin - 1] : nan;
-    const float right = c < width ? row[c] : nan;
-    if (std::isfinite(left) && std::isfinite(right) && std::abs(left - right) <= kSameSurfacePx) {
-      // One surface on both sides: interpolate (a step would look like a depth edge).
-      const float step = (right - left) / static_cast<float>(c - begin + 1);
-      for (int i = begin; i < c; ++i) row[i] = left + step * static_cast<float>(i - begin + 1);
-      continue;
-    }
-    float value = nan;
-    if (std::isfinite(left) && std::isfinite(right)) {
-      value = std::min(left, right);  // the background side
-    } else if (std::isfinite(left)) {
-      value = left;
-    } else if (std::isfinite(right)) {
-      value = right;
-    }
-    std::fill(row + begin, row + c, value);
-  }
-}
-
 float FilledDisparityAt(const float* row, int width, int u, RowGap* gap) {
   if (Known(row[u])) return row[u];
   const float nan = std::numeric_limits<float>::quiet_NaN();
@@ -56,16 +24,21 @@ float FilledDisparityAt(const float* row, int width, int u, RowGap* gap) {
     while (end < width && !Known(row[end])) ++end;
     *gap = {begin, end, begin > 0 ? row[begin - 1] : nan, end < width ? row[end] : nan};
   }
-  // As FillUnknownDisparityRow, operation for operation.
   const float left = gap->left, right = gap->right;
   if (std::isfinite(left) && std::isfinite(right) && std::abs(left - right) <= kSameSurfacePx) {
+    // One surface on both sides: interpolate (a step would look like a depth edge).
     const float step = (right - left) / static_cast<float>(gap->end - gap->begin + 1);
     return left + step * static_cast<float>(u - gap->begin + 1);
   }
-  if (std::isfinite(left) && std::isfinite(right)) return std::min(left, right);
+  if (std::isfinite(left) && std::isfinite(right)) return std::min(left, right);  // background
   if (std::isfinite(left)) return left;
   if (std::isfinite(right)) return right;
   return nan;
+}
+
+void FillUnknownDisparityRow(const float* in, float* out, int width) {
+  RowGap gap;
+  for (int u = 0; u < width; ++u) out[u] = FilledDisparityAt(in, width, u, &gap);
 }
 
 cv::Mat FillUnknownDisparity(const cv::Mat& disparity) {

@@ -18,9 +18,9 @@ cv::Mat FillUnknownDisparity(const cv::Mat& disparity);
 // The same for one row of `width` values (in and out must not overlap).
 void FillUnknownDisparityRow(const float* in, float* out, int width);
 
-// FillUnknownDisparityRow's value at column u alone, for rows where few pixels need it: only
-// the gap around u is looked at. The gap last found is remembered in `gap` (one per row; reset
-// it for a new row), so the pixels of one gap cost one scan. Same values to the bit.
+// The same value at column u alone, for rows where few pixels need it: only the gap around u
+// is looked at. The gap last found is remembered in `gap` (one per row; reset it for a new
+// row), so the pixels of one gap cost one scan. Known values are returned as they are.
 struct RowGap {
   int begin = 0, end = 0;  // [begin, end): the unknown run; empty = none remembered
   float left = 0, right = 0;
