@@ -12,6 +12,18 @@ namespace {
 
 using epmap::ctl::ClientOptions;
 
+// A titled list of counters, one "reason count" line each; nothing when the list is empty
+// (unless always).
+void PrintCounters(const char* title,
+                   const google::protobuf::RepeatedPtrField<epmap::v1::Counter>& counters,
+                   bool always = false) {
+  if (counters.empty() && !always) return;
+  std::printf("%s:\n", title);
+  for (const auto& c : counters) {
+    std::printf("  %-44s %llu\n", c.reason().c_str(), static_cast<unsigned long long>(c.count()));
+  }
+}
+
 void PrintHuman(const epmap::v1::ServiceStatus& s) {
   std::printf("epmapd %s, up %.1f s, mode %s\n", s.version().c_str(), s.uptime_s(),
               s.mode().c_str());
@@ -32,35 +44,12 @@ void PrintHuman(const epmap::v1::ServiceStatus& s) {
               static_cast<unsigned long long>(s.full_refreshes()));
   if (s.unexpected_watchers())
     std::printf("watch-unexpected streams: %u\n", s.unexpected_watchers());
-  if (s.rejected_by_reason_size()) {
-    std::printf("rejected:\n");
-    for (const auto& c : s.rejected_by_reason()) {
-      std::printf("  %-44s %llu\n", c.reason().c_str(), static_cast<unsigned long long>(c.count()));
-    }
-  }
-  if (s.key_frames_refused_by_reason_size()) {
-    std::printf("key frames the maps refused (%llu; their frames were processed):\n",
-                static_cast<unsigned long long>(s.key_frames_refused()));
-    for (const auto& c : s.key_frames_refused_by_reason()) {
-      std::printf("  %-44s %llu\n", c.reason().c_str(), static_cast<unsigned long long>(c.count()));
-    }
-  }
-  if (s.queue_drops_by_reason_size()) {
-    std::printf("queue drops:\n");
-    for (const auto& c : s.queue_drops_by_reason()) {
-      std::printf("  %-44s %llu\n", c.reason().c_str(), static_cast<unsigned long long>(c.count()));
-    }
-  }
-  if (s.transport_lost_by_topic_size()) {
-    std::printf("lost in transport:\n");
-    for (const auto& c : s.transport_lost_by_topic()) {
-      std::printf("  %-44s %llu\n", c.reason().c_str(), static_cast<unsigned long long>(c.count()));
-    }
-  }
-  std::printf("messages by topic:\n");
-  for (const auto& c : s.messages_by_topic()) {
-    std::printf("  %-44s %llu\n", c.reason().c_str(), static_cast<unsigned long long>(c.count()));
-  }
+  PrintCounters("rejected", s.rejected_by_reason());
+  PrintCounters("key frames the maps refused (their frames were processed)",
+                s.key_frames_refused_by_reason());
+  PrintCounters("queue drops", s.queue_drops_by_reason());
+  PrintCounters("lost in transport", s.transport_lost_by_topic());
+  PrintCounters("messages by topic", s.messages_by_topic(), /*always=*/true);
   if (s.stages_size()) {
     std::printf("stages (ms):            last   median      p99  samples\n");
     for (const auto& t : s.stages()) {
@@ -68,12 +57,7 @@ void PrintHuman(const epmap::v1::ServiceStatus& s) {
                   t.median_ms(), t.p99_ms(), static_cast<unsigned long long>(t.samples()));
     }
   }
-  if (s.events_size()) {
-    std::printf("events:\n");
-    for (const auto& c : s.events()) {
-      std::printf("  %-44s %llu\n", c.reason().c_str(), static_cast<unsigned long long>(c.count()));
-    }
-  }
+  PrintCounters("events", s.events());
   if (!s.active_eye_hand_model().empty() || !s.active_stereo_model().empty()) {
     std::printf("active models: eye-hand %s, stereo %s\n", s.active_eye_hand_model().c_str(),
                 s.active_stereo_model().c_str());
