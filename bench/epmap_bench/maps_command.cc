@@ -721,7 +721,17 @@ int RunCommand(int argc, char** argv) {
       std::ostringstream o;
       o << "{\"iou\":" << Num(s.iou) << ",\"iou_observed\":" << Num(s.iou_observed)
         << ",\"occupied_cells\":" << s.occupied << ",\"wall_cells\":" << s.wall_cells
-        << ",\"wall_cells_observed\":" << s.wall_cells_observed << "}";
+        << ",\"wall_cells_observed\":"
+        << s.wall_cells_observed
+        // precision: occupied cells on a wall; recall: seen wall cells found occupied
+        << ",\"precision\":"
+        << Num(s.occupied ? static_cast<double>(s.intersection) / static_cast<double>(s.occupied)
+                          : 0.0)
+        << ",\"recall_observed\":"
+        << Num(s.wall_cells_observed ? static_cast<double>(s.intersection) /
+                                           static_cast<double>(s.wall_cells_observed)
+                                     : 0.0)
+        << "}";
       return o.str();
     };
     const auto grid_score = [&](const epmap::occupancy::GridExport& g) {

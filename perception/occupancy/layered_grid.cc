@@ -34,6 +34,9 @@ void MeasurementParams::Validate() const {
   unit(empty_evidence, "empty_evidence");
   unit(occupied_evidence, "occupied_evidence");
   unit(confidence_evidence, "confidence_evidence");
+  if (!(frequency_prior > 0) || !std::isfinite(frequency_prior)) {
+    throw std::invalid_argument("occupancy measurement: frequency_prior must be > 0");
+  }
   if (!(empty_gap_sigmas >= 0)) {
     throw std::invalid_argument("occupancy measurement: empty_gap_sigmas must be >= 0");
   }
@@ -47,6 +50,13 @@ namespace {
 // Fuzzy union of a membership with new evidence (probabilistic sum).
 inline void Union(float& mu, double evidence) {
   mu = static_cast<float>(mu + evidence - mu * evidence);
+}
+
+// Membership::kRayFrequency: the memberships from the cell's hit and pass weights.
+inline void SetFrequencies(float hits, float passes, float prior, float& occupied, float& empty) {
+  const float total = hits + passes + prior;
+  occupied = hits / total;
+  empty = passes / total;
 }
 
 }  // namespace
@@ -67,6 +77,8 @@ LayeredGrid::LayeredGrid(const LayeredGrid& other)
     layers_[l].empty = other.layers_[l].empty.clone();
     layers_[l].occupied = other.layers_[l].occupied.clone();
     layers_[l].confidence = other.layers_[l].confidence.clone();
+    layers_[l].hits = other.layers_[l].hits.clone();
+    layers_[l].passes = other.layers_[l].passes.clone();
   }
 }
 
@@ -125,7 +137,10 @@ void LayeredGrid::EnsureCovers(int64_t ix_lo, int64_t iy_lo, int64_t ix_hi, int6
                             std::to_string(nh) + " cells is beyond reason (a point far away?)");
   }
   for (auto& layer : layers_) {
-    for (cv::Mat* m : {&layer.empty, &layer.occupied, &layer.confidence}) {
+    for (cv::Mat* m :
+         {&layer.empty, &layer.occupied, &layer.confidence, &layer.hits, &layer.passes}) {
+      const bool counts = m == &layer.hits || m == &layer.passes;
+      if (counts && m->empty()) continue;  // allocated by the first ray-frequency point
       cv::Mat grown(static_cast<int>(nh), static_cast<int>(nw), CV_32FC1, cv::Scalar(0));
       if (width_ > 0) {
         m->copyTo(grown(cv::Rect(static_cast<int>(min_ix_ - nx0), static_cast<int>(min_iy_ - ny0),
@@ -156,6 +171,14 @@ bool LayeredGrid::AddPoint(const Eigen::Vector3d& origin, const Eigen::Vector3d&
   const int64_t ex = CellX(p.x()), ey = CellY(p.y());
   const int64_t sx = CellX(o.x()), sy = CellY(o.y());
   EnsureCovers(std::min(sx, ex), std::min(sy, ey), std::max(sx, ex), std::max(sy, ey));
+  const bool frequency = mp.membership == Membership::kRayFrequency;
+  if (frequency && layers_.front().hits.empty()) {
+    for (auto& layer : layers_) {
+      layer.hits = cv::Mat::zeros(height_, width_, CV_32FC1);
+      layer.passes = cv::Mat::zeros(height_, width_, CV_32FC1);
+    }
+  }
+  const float prior = static_cast<float>(mp.frequency_prior);
 
   // Amanatides-Woo traversal of the cells between the head and the point, in the plane; the
   // height of the ray inside each cell picks the layer the empty evidence goes to.
@@ -179,7 +202,14 @@ bool LayeredGrid::AddPoint(const Eigen::Vector3d& origin, const Eigen::Vector3d&
       if (l >= 0) {
         const int c = static_cast<int>(ix - min_ix_), r = static_cast<int>(iy - min_iy_);
         Layer& L = layers_[static_cast<size_t>(l)];
-        Union(L.empty.at<float>(r, c), mp.empty_evidence);
+        if (frequency) {
+          float& passes = L.passes.at<float>(r, c);
+          passes += static_cast<float>(weight);
+          SetFrequencies(L.hits.at<float>(r, c), passes, prior, L.occupied.at<float>(r, c),
+                         L.empty.at<float>(r, c));
+        } else {
+          Union(L.empty.at<float>(r, c), mp.empty_evidence);
+        }
         Union(L.confidence.at<float>(r, c), empty_k);
       }
     } else {
@@ -198,7 +228,14 @@ bool LayeredGrid::AddPoint(const Eigen::Vector3d& origin, const Eigen::Vector3d&
   if (l >= 0) {
     const int c = static_cast<int>(ex - min_ix_), r = static_cast<int>(ey - min_iy_);
     Layer& L = layers_[static_cast<size_t>(l)];
-    Union(L.occupied.at<float>(r, c), mp.occupied_evidence * weight);
+    if (frequency) {
+      float& hits = L.hits.at<float>(r, c);
+      hits += static_cast<float>(weight);
+      SetFrequencies(hits, L.passes.at<float>(r, c), prior, L.occupied.at<float>(r, c),
+                     L.empty.at<float>(r, c));
+    } else {
+      Union(L.occupied.at<float>(r, c), mp.occupied_evidence * weight);
+    }
     Union(L.confidence.at<float>(r, c), mp.confidence_evidence * weight);
   }
   return true;

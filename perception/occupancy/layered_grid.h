@@ -29,15 +29,31 @@ struct GridParams {
   void Validate() const;
 };
 
+// How the evidence of many rays becomes a cell's memberships mu_O and mu_E.
+enum class Membership {
+  // Share of the (weighted) rays touching the cell that end in it: mu_O = H / (H + P + prior),
+  // mu_E = P / (H + P + prior), H = weight of the points in the cell, P = weight of the rays
+  // passing through it. A cell in front of a wall, where a few noisy points land but most rays
+  // pass, stays free: on the building run the occupied cells one cell off the wall faces
+  // halved (grid IoU over seen cells 0.35 -> 0.51, perception/occupancy/README.md).
+  kRayFrequency,
+  // FLOG's fuzzy union (probabilistic sum a + b - ab) of fixed evidence per ray: a handful of
+  // noisy points saturates mu_O whatever the rays passing through say.
+  kFuzzyUnion,
+};
+
 // How one measurement changes the memberships. The paper (and FLOG) leave the numbers open:
-// these are our defaults, combined by the fuzzy union (probabilistic sum a + b - ab).
+// these are our defaults.
 struct MeasurementParams {
-  double empty_evidence = 0.25;      // on each cell the ray crosses before the point
-  double occupied_evidence = 0.6;    // on the point's cell, times the range weight
+  Membership membership = Membership::kRayFrequency;
+  double frequency_prior = 0.5;      // kRayFrequency: the "prior" weight in the denominators
+  double empty_evidence = 0.25;      // kFuzzyUnion: on each cell the ray crosses before the point
+  double occupied_evidence = 0.6;    // kFuzzyUnion: on the point's cell, times the range weight
   double confidence_evidence = 0.3;  // on every touched cell, times the range weight
   // The ray stops giving empty evidence this many range sigmas before the point (at least one
-  // cell), so the point's own uncertainty never clears it.
-  double empty_gap_sigmas = 2.0;
+  // cell), so the point's own uncertainty never clears it. With kRayFrequency the passes a
+  // noisy point's neighbours get are outweighed by the hits, so the gap can be smaller.
+  double empty_gap_sigmas = 1.0;
   // Range weight w = min(1, (resolution / sigma)^weight_exponent).
   double weight_exponent = 1.0;
   // Farther points are ignored: at 8 m a stereo point of this rig is uncertain by more than
@@ -134,6 +150,9 @@ class LayeredGrid {
  private:
   struct Layer {
     cv::Mat empty, occupied, confidence;  // CV_32FC1, height_ x width_
+    // kRayFrequency: weight of the points in each cell (hits) and of the rays through it
+    // (passes). A merged (global) map has none: its memberships are averages.
+    cv::Mat hits, passes;
   };
   void EnsureCovers(int64_t ix_lo, int64_t iy_lo, int64_t ix_hi, int64_t iy_hi);
   void CheckLayer(int layer) const;

@@ -7,10 +7,66 @@ namespace {
 
 using occupancy::LayeredGrid;
 
+occupancy::MeasurementParams FuzzyUnion() {
+  occupancy::MeasurementParams mp;
+  mp.membership = occupancy::Membership::kFuzzyUnion;
+  return mp;
+}
+
 // Default layers: [0.1, 0.7), [0.7, 1.3), [1.3, 2.0) above the floor; 10 cm cells.
-TEST(LayeredGrid, ARayMarksEmptyCellsUpToThePointAndTheOccupiedCellAtIt) {
+TEST(LayeredGrid, RayFrequencyMarksEmptyCellsUpToThePointAndTheOccupiedCellAtIt) {
   LayeredGrid g;
-  const occupancy::MeasurementParams mp;
+  const occupancy::MeasurementParams mp;  // the default: Membership::kRayFrequency
+  ASSERT_EQ(mp.membership, occupancy::Membership::kRayFrequency);
+  ASSERT_TRUE(g.AddPoint({0.05, 0.05, 1.0}, {3.05, 0.05, 1.0}, 0.01, mp));
+  const float prior = static_cast<float>(mp.frequency_prior);
+  // One ray of weight 1: crossed cells mu_E = 1 / (1 + prior), the point's cell mu_O the same.
+  for (int ix = 0; ix < 29; ++ix) {
+    EXPECT_NEAR(g.At(1, ix, 0).empty, 1 / (1 + prior), 1e-6) << ix;
+    EXPECT_EQ(g.At(1, ix, 0).occupied, 0.0F) << ix;
+  }
+  EXPECT_NEAR(g.At(1, 30, 0).occupied, 1 / (1 + prior), 1e-6);
+  EXPECT_EQ(g.At(1, 30, 0).empty, 0.0F);
+  EXPECT_EQ(g.At(1, 31, 0).confidence, 0.0F);
+  // A second ray ending 1 m farther passes through the first point's cell: one hit, one pass.
+  ASSERT_TRUE(g.AddPoint({0.05, 0.05, 1.0}, {4.05, 0.05, 1.0}, 0.01, mp));
+  EXPECT_NEAR(g.At(1, 30, 0).occupied, 1 / (2 + prior), 1e-6);
+  EXPECT_NEAR(g.At(1, 30, 0).empty, 1 / (2 + prior), 1e-6);
+  EXPECT_NEAR(g.At(1, 5, 0).empty, 2 / (2 + prior), 1e-6);
+}
+
+// What the frequency model is for: stereo depth noise scatters a few of a wall's points into
+// the cell in front of it. The union saturates that cell's mu_O; counted against the rays that
+// pass through it to the wall, it stays free, and the wall stays one cell thick.
+TEST(LayeredGrid, RayFrequencyKeepsTheCellInFrontOfAWallFreeWhereNoisyPointsLand) {
+  const Eigen::Vector3d head(0.05, 0.05, 1.0);
+  const auto build = [&](const occupancy::MeasurementParams& mp) {
+    LayeredGrid g;
+    for (int k = 0; k < 20; ++k) {
+      // The wall's cell is 30 ([3.0, 3.1)); 4 of 20 points fall short into cell 29, 6 beyond
+      // the face into the wall (cell 31), and their rays pass through cell 29 (a ray stops
+      // giving empty evidence one cell before its point).
+      const double x = k < 4 ? 2.95 : (k < 14 ? 3.05 : 3.15);
+      g.AddPoint(head, {x, 0.05, 1.0}, 0.01, mp);
+    }
+    return g;
+  };
+  const LayeredGrid frequency = build({});
+  const LayeredGrid fuzzy_union = build(FuzzyUnion());
+  const auto occupied = [](const LayeredGrid& g, int ix) {
+    const auto c = g.Combined(ix, 0);
+    return c.occupied - c.empty >= 0.3F;  // occupancy >= 65: map_server's occupied_thresh
+  };
+  EXPECT_TRUE(occupied(fuzzy_union, 29));  // the union thickens the wall...
+  EXPECT_FALSE(occupied(frequency, 29));   // ... the ray frequency does not
+  EXPECT_LT(frequency.At(1, 29, 0).occupied, frequency.At(1, 29, 0).empty);
+  EXPECT_TRUE(occupied(frequency, 30));
+  EXPECT_TRUE(occupied(fuzzy_union, 30));
+}
+
+TEST(LayeredGrid, FuzzyUnionMarksEmptyCellsUpToThePointAndTheOccupiedCellAtIt) {
+  LayeredGrid g;
+  const occupancy::MeasurementParams mp = FuzzyUnion();
   ASSERT_TRUE(g.AddPoint({0.05, 0.05, 1.0}, {3.05, 0.05, 1.0}, 0.01, mp));
   // Camera height 1.0 m: layer 1. Cells between the head and the point are empty...
   for (int ix = 0; ix < 29; ++ix) {
@@ -48,14 +104,21 @@ TEST(LayeredGrid, ARayToTheFloorCrossesLayersAndMarksNoObstacle) {
 }
 
 TEST(LayeredGrid, VaguePointsCountLessAndFarOnesNotAtAll) {
+  for (const occupancy::MeasurementParams& mp : {occupancy::MeasurementParams{}, FuzzyUnion()}) {
+    LayeredGrid g;
+    g.AddPoint({0.05, 0.05, 1.0}, {2.05, 0.05, 1.0}, 0.01, mp);
+    g.AddPoint({0.05, 1.05, 1.0}, {2.05, 1.05, 1.0}, 0.4, mp);  // 4 cells of depth uncertainty
+    EXPECT_GT(g.At(1, 20, 0).occupied, 1.9 * g.At(1, 20, 10).occupied);
+    // Empty evidence stops one sigma (40 cm) before the vague point.
+    EXPECT_GT(g.At(1, 15, 10).empty, 0.0F);
+    EXPECT_EQ(g.At(1, 17, 10).empty, 0.0F);
+  }
+  // With the ray frequency, a sharp ray passing through outweighs a vague point's hit.
   LayeredGrid g;
   const occupancy::MeasurementParams mp;
-  g.AddPoint({0.05, 0.05, 1.0}, {2.05, 0.05, 1.0}, 0.01, mp);
-  g.AddPoint({0.05, 1.05, 1.0}, {2.05, 1.05, 1.0}, 0.4, mp);  // 4 cells of depth uncertainty
-  EXPECT_GT(g.At(1, 20, 0).occupied, 3 * g.At(1, 20, 10).occupied);
-  // Empty evidence stops two sigmas (80 cm) before the vague point.
-  EXPECT_GT(g.At(1, 11, 10).empty, 0.0F);
-  EXPECT_EQ(g.At(1, 13, 10).empty, 0.0F);
+  g.AddPoint({0.05, 0.05, 1.0}, {2.05, 0.05, 1.0}, 0.4, mp);
+  g.AddPoint({0.05, 0.05, 1.0}, {4.05, 0.05, 1.0}, 0.01, mp);
+  EXPECT_GT(g.At(1, 20, 0).empty, 3 * g.At(1, 20, 0).occupied);
   EXPECT_FALSE(g.AddPoint({0, 0, 1}, {mp.max_range_m + 1, 0, 1}, 0.01, mp));
   EXPECT_FALSE(g.AddPoint({0, 0, 1}, {std::nan(""), 0, 1}, 0.01, mp));
   EXPECT_FALSE(g.AddPoint({0, 0, 1}, {0, 0, 0.5}, 0.01, mp));  // straight down: no cell to mark
