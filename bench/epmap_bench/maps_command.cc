@@ -673,6 +673,16 @@ int RunCommand(int argc, char** argv) {
     const auto kept = ToSegments(maps.perceptual.kept_segments);
     j << ",\"perceptual_map\":{\"segments\":" << segs.size() << ",\"kept_segments\":" << kept.size()
       << ",\"segment_length_m\":" << Num(epmap::mobile_mapping::TotalLength(segs), 2);
+    {
+      // Views that joined the map, and how many of them no common object could anchor (placed
+      // by the motion since the previous map view instead, III-C's fallback).
+      size_t in_map = 0, by_motion = 0;
+      for (const auto& v : maps.perceptual.views) {
+        in_map += v.in_map;
+        by_motion += v.in_map && v.placed_by_pose;
+      }
+      j << ",\"map_views\":" << in_map << ",\"map_views_placed_by_motion\":" << by_motion;
+    }
     if (!truth.walls.empty()) {
       double visible_len = 0;
       const double cov = epmap::mobile_mapping::CoveredShare(truth.walls, segs, 0.5);

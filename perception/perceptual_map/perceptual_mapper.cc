@@ -27,6 +27,9 @@ void PerceptualMapParams::Validate() const {
   if (!(anchor_length_agreement > 0 && anchor_length_agreement <= 1)) {
     throw std::invalid_argument("perceptual map: anchor_length_agreement must be in (0, 1]");
   }
+  if (!(anchor_motion_tolerance_m >= 0)) {
+    throw std::invalid_argument("perceptual map: anchor_motion_tolerance_m must be >= 0");
+  }
   if (!(anchor_search_m >= 0)) {
     throw std::invalid_argument("perceptual map: anchor_search_m must be >= 0");
   }
@@ -188,6 +191,10 @@ void PerceptualMapper::Expand(ViewState* view, std::vector<MapSegment>* segments
     bool agrees;               // same extent in the view and in the map
   };
   std::vector<Common> common;
+  // Where the robot's motion since the last map view puts this view (the check on anchors).
+  const MapView& last = (*views)[last_map_view];
+  const Eigen::Isometry2d T_by_motion =
+      last.T_map_base * (last.T_world_base.inverse() * record.T_world_base);
   for (size_t k = 0; k < view->objects.size(); ++k) {
     const int64_t id = view->global_id[k];
     if (id < 0 || !index.count(id)) continue;
@@ -197,15 +204,22 @@ void PerceptualMapper::Expand(ViewState* view, std::vector<MapSegment>* segments
     const bool a_first = (R * o.a).dot(dir) <= (R * o.b).dot(dir);
     const double lo = std::min(o.length(), g.length());
     const double hi = std::max(o.length(), g.length());
-    common.push_back(
-        {k, a_first ? o.a : o.b, g.a, hi > 0 && lo / hi >= params_.anchor_length_agreement});
+    const Eigen::Vector2d end_view = a_first ? o.a : o.b;
+    if (params_.anchor_motion_tolerance_m > 0) {
+      // Not the same physical end point in the view and in the map (the wall was cut elsewhere
+      // or seen shorter): it would place the view, and all it adds, off by the difference.
+      const Eigen::Vector2d implied = g.a - R * end_view;  // the view's position it implies
+      if ((implied - T_by_motion.translation()).norm() > params_.anchor_motion_tolerance_m) {
+        continue;
+      }
+    }
+    common.push_back({k, end_view, g.a, hi > 0 && lo / hi >= params_.anchor_length_agreement});
   }
 
   if (common.empty() || params_.place_by_pose) {
     // No common object to triangulate from: the view is placed by the robot's motion from the
     // last map view (the situation the paper avoids by adding V_{n-1}, counted here).
-    const MapView& last = (*views)[last_map_view];
-    record.T_map_base = last.T_map_base * (last.T_world_base.inverse() * record.T_world_base);
+    record.T_map_base = T_by_motion;
     record.placed_by_pose = true;
   } else {
     // The view's position in the map (for the path): the median of the translations the

@@ -128,6 +128,34 @@ TEST(PerceptualMapper, TheAccumulatedTurnOrientsNewObjects) {
   EXPECT_GT(far_angle / n, 4 * kDeg);
 }
 
+// A wall the first view saw only from x = 2.38 (occluded before) and the second from x = 2.0:
+// the map's piece of the cell [2.0, 2.5) and the view's share an id but not their "left" end
+// point, 0.38 m apart. A new object placed from that anchor lands 0.38 m off; the check against
+// the robot's motion since the last map view leaves it out, and the next common object anchors.
+TEST(PerceptualMapper, AnAnchorWhoseEndPointIsNotTheSamePhysicalPointIsNotUsed) {
+  const Seg wall_seen_from_2_38{{2.38, 1.25}, {4.0, 1.25}};
+  const Seg wall{{2.0, 1.25}, {4.0, 1.25}};
+  const Seg new_wall{{2.25, 1.75}, {2.25, 2.75}};  // nearest to the cell [2.0, 2.5) of `wall`
+  const auto place_new_wall = [&](double tolerance) {
+    perceptual_map::PerceptualMapParams params;
+    params.min_tracked = 1000;             // every view makes the previous one join the map
+    params.anchor_length_agreement = 0.2;  // the short piece counts as agreeing in length
+    params.anchor_motion_tolerance_m = tolerance;
+    PerceptualMapper mapper(params);
+    const auto p0 = Pose(0, 0, 0), p1 = Pose(0.1, 0, 0), p2 = Pose(0.2, 0, 0);
+    mapper.AddView(1, Points({wall_seen_from_2_38}, p0, 10, 1), p0);
+    mapper.AddView(2, Points({wall, new_wall}, p1, 10, 2), p1);
+    mapper.AddView(3, Points({wall, new_wall}, p2, 10, 3), p2);  // view 2 joins the map
+    double x = std::nan("");
+    for (const auto& s : mapper.Map(false).segments) {
+      if (s.view_id == 2 && std::abs(s.b.y() - s.a.y()) > 0.2) x = 0.5 * (s.a.x() + s.b.x());
+    }
+    return x;
+  };
+  EXPECT_NEAR(place_new_wall(0.0), 2.25 + 0.38, 0.05);  // no check: placed from the wrong end
+  EXPECT_NEAR(place_new_wall(0.3), 2.25, 0.05);
+}
+
 TEST(PerceptualMapper, BlankViewsAndBadPosesLeaveTheMapIntact) {
   PerceptualMapper mapper;
   const auto T = Pose(2, 0, 0);
