@@ -217,8 +217,9 @@ void PerceptualMapper::Expand(ViewState* view, std::vector<MapSegment>* segments
   }
 
   if (common.empty() || params_.place_by_pose) {
-    // No common object to triangulate from: the view is placed by the robot's motion from the
-    // last map view (the situation the paper avoids by adding V_{n-1}, counted here).
+    // No common object to triangulate from (or none consistent with the motion): the view is
+    // placed by the robot's motion from the last map view (the situation the paper avoids by
+    // adding V_{n-1}, counted here).
     record.T_map_base = T_by_motion;
     record.placed_by_pose = true;
   } else {
