@@ -731,17 +731,9 @@ int RunCommand(int argc, char** argv) {
       std::ostringstream o;
       o << "{\"iou\":" << Num(s.iou) << ",\"iou_observed\":" << Num(s.iou_observed)
         << ",\"occupied_cells\":" << s.occupied << ",\"wall_cells\":" << s.wall_cells
-        << ",\"wall_cells_observed\":"
-        << s.wall_cells_observed
-        // precision: occupied cells on a wall; recall: seen wall cells found occupied
-        << ",\"precision\":"
-        << Num(s.occupied ? static_cast<double>(s.intersection) / static_cast<double>(s.occupied)
-                          : 0.0)
-        << ",\"recall_observed\":"
-        << Num(s.wall_cells_observed ? static_cast<double>(s.intersection) /
-                                           static_cast<double>(s.wall_cells_observed)
-                                     : 0.0)
-        << "}";
+        << ",\"wall_cells_observed\":" << s.wall_cells_observed
+        << ",\"precision\":" << Num(s.precision)
+        << ",\"recall_observed\":" << Num(s.recall_observed) << "}";
       return o.str();
     };
     const auto grid_score = [&](const epmap::occupancy::GridExport& g) {

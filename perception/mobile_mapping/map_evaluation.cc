@@ -163,6 +163,11 @@ GridScore ScoreGrid(const occupancy::GridExport& g, const std::vector<Segment2>&
   score.iou = uni ? static_cast<double>(score.intersection) / static_cast<double>(uni) : 0.0;
   score.iou_observed =
       uni_obs ? static_cast<double>(score.intersection) / static_cast<double>(uni_obs) : 0.0;
+  const auto share = [&](size_t of) {
+    return of ? static_cast<double>(score.intersection) / static_cast<double>(of) : 0.0;
+  };
+  score.precision = share(score.occupied);
+  score.recall_observed = share(score.wall_cells_observed);
   return score;
 }
 

@@ -39,6 +39,8 @@ struct GridScore {
   size_t wall_cells = 0;    // rasterised true walls inside the grid extent
   size_t wall_cells_observed = 0;
   size_t intersection = 0;
+  double precision = 0;        // occupied cells that are wall cells (intersection / occupied)
+  double recall_observed = 0;  // known wall cells found occupied (intersection / observed)
 };
 
 // Rasterises the walls at the grid's resolution and lattice (every cell the wall line touches)

@@ -60,6 +60,8 @@ TEST(MapEvaluation, GridIouAgainstRasterisedWalls) {
   s = mobile_mapping::ScoreGrid(g, walls);
   EXPECT_EQ(s.wall_cells_observed, 8u);
   EXPECT_NEAR(s.iou_observed, 6.0 / (8 + 2), 1e-12);
+  EXPECT_NEAR(s.precision, 6.0 / 8, 1e-12);        // 6 of the 8 occupied cells on the wall
+  EXPECT_NEAR(s.recall_observed, 6.0 / 8, 1e-12);  // 6 of the 8 known wall cells occupied
   // A wall exactly on a cell boundary touches the cells on both sides.
   EXPECT_EQ(mobile_mapping::ScoreGrid(g, {{{0.05, 0.5}, {0.15, 0.5}}}).wall_cells, 4u);
 }
