@@ -2,7 +2,8 @@
 //   epmap-sim record  --scenario NAME --out DIR [--frames N] [--seed S] [--size WxH] [--force]
 //   epmap-sim publish --scenario NAME --domain N [--rate HZ] [--frames N] [--seed S] [--size WxH]
 //   epmap-sim list
-// Scenario knobs for both: --encoder-noise-scale X, --flicker-scale X, --no-noise, --reverse.
+// Scenario knobs for both: --encoder-noise-scale X, --flicker-scale X, --no-noise, --reverse,
+// --disparity-every-frame.
 // Exit codes: 0 done, 2 bad input (the message says why), 1 failure while running.
 
 #include <CLI/CLI.hpp>
@@ -34,6 +35,7 @@ struct CommonFlags {
   double flicker_scale = 1;
   bool no_noise = false;
   bool reverse = false;
+  bool disparity_every_frame = false;
 
   void AddTo(CLI::App* app) {
     std::string names;
@@ -49,6 +51,8 @@ struct CommonFlags {
     app->add_flag("--no-noise", no_noise,
                   "exact encoders, true chain = URDF, no image noise or flicker");
     app->add_flag("--reverse", reverse, "building: drive the route in the reverse direction");
+    app->add_flag("--disparity-every-frame", disparity_every_frame,
+                  "building: true disparity for every frame, not only at the stops");
   }
 
   epmap::sim::ScenarioOptions Options() const {
@@ -61,6 +65,7 @@ struct CommonFlags {
     o.flicker_scale = flicker_scale;
     o.noise = !no_noise;
     o.reverse = reverse;
+    o.disparity_every_frame = disparity_every_frame;
     return o;
   }
 };

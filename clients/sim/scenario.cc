@@ -60,6 +60,11 @@ std::unique_ptr<Scenario> MakeScenario(const ScenarioOptions& options) {
   if (options.reverse && name != "building") {
     throw std::invalid_argument("--reverse applies to the building scenario only");
   }
+  if (options.disparity_every_frame && name != "building") {
+    throw std::invalid_argument(
+        "--disparity-every-frame applies to the building scenario only (the others write it "
+        "for every frame)");
+  }
   if (name == "eye-hand" && (options.width > 0 || options.frames > 0)) {
     throw std::invalid_argument(
         "eye-hand has no images: --size and --frames do not apply (20 ellipsoidal paths of 100 "

@@ -32,12 +32,14 @@ struct ScenarioOptions {
   std::string name = "head";  // head | vergence | building | eye-hand
   int frames = 0;             // 0 = the scenario's default
   uint64_t seed = 1;
-  int width = 0, height = 0;       // 0 = the scenario's default image size
-  double encoder_noise_scale = 1;  // multiplies encoder (and odometry) noise
-  double flicker_scale = 1;        // multiplies the illumination flicker
-  bool noise = true;               // false: exact encoders and odometry, true chain = URDF,
-                                   // no image noise, no flicker (for exactness checks)
-  bool reverse = false;            // building: drive the route backwards
+  int width = 0, height = 0;           // 0 = the scenario's default image size
+  double encoder_noise_scale = 1;      // multiplies encoder (and odometry) noise
+  double flicker_scale = 1;            // multiplies the illumination flicker
+  bool noise = true;                   // false: exact encoders and odometry, true chain = URDF,
+                                       // no image noise, no flicker (for exactness checks)
+  bool reverse = false;                // building: drive the route backwards
+  bool disparity_every_frame = false;  // building: true disparity for every frame, not only at
+                                       // the look-around stops (to score the EP map driving)
   int64_t start_stamp_ns = kRecordStartStampNs;  // stamp of frame 0
 };
 
