@@ -11,7 +11,8 @@
 // and after C has settled).
 //
 // Any dataset in the layout of ../shared/docs/dataset-layout.md: camera poses from
-// mav0/kinematics.urdf + joints0 (joint names must match), or a fixed rig without them;
+// mav0/kinematics.urdf + joints0 (joint names must match), or a fixed rig without them, on a
+// mobile base's odometry0 when the dataset has one (JSON "base_odometry");
 // unrectified pairs are rectified first (StereoRectifyFromExtrinsics + Rectifier), as the
 // service does. --internal-model learned also trains the paper's learned internal model (Sec.
 // III) on the URDF chain over the recorded neck range and runs the EP a second time with it.
@@ -207,7 +208,19 @@ PoseFn PoseFromSource(const Dataset& d, const Rig& rig,
       }
       in.joints = *q;
     }
-    return source->CameraPose(in) * rig.T_cam0_rect;
+    const Eigen::Isometry3d T_base_cam0 = source->CameraPose(in) * rig.T_cam0_rect;
+    if (d.odometry.empty()) return T_base_cam0;
+    // A mobile base: its planar pose from odometry0, then the chain (as epmapd's "odometry"
+    // pose source does), so that the EP sees the base's motion too.
+    const auto odom = epmap::dataset::InterpolatePlanar(d.odometry, d.frames[i].stamp_ns);
+    if (!odom) {
+      throw std::runtime_error("no odometry reading near frame " +
+                               std::to_string(d.frames[i].stamp_ns));
+    }
+    Eigen::Isometry3d T_odom_base = Eigen::Isometry3d::Identity();
+    T_odom_base.translation() = Eigen::Vector3d(odom->x, odom->y, 0.0);
+    T_odom_base.linear() = Eigen::AngleAxisd(odom->theta, Eigen::Vector3d::UnitZ()).matrix();
+    return T_odom_base * T_base_cam0;
   };
 }
 
@@ -537,6 +550,7 @@ int Run(int argc, char** argv) {
     if (!json) {
       std::cerr << "epmap-bench ep: " << n << " frames " << rig.geometry.width << "x"
                 << rig.geometry.height << ", pose source " << source->Name()
+                << (d.odometry.empty() ? "" : " on the base's odometry0")
                 << (source_note.empty() ? "" : " (" + source_note + ")")
                 << (rig.rectifier.identity() ? "" : ", rectifying") << "\n";
     }
@@ -554,6 +568,7 @@ int Run(int argc, char** argv) {
     j.Int("width", rig.geometry.width).Int("height", rig.geometry.height);
     j.Int("num_disparities", params.sgbm.num_disparities);
     j.Str("pose_source", source->Name());
+    j.Bool("base_odometry", !d.odometry.empty());
     j.Bool("rectified_here", !rig.rectifier.identity());
     Summarise(main, settle, &j);
 
