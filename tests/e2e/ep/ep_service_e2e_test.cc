@@ -236,8 +236,8 @@ TEST_F(EpServiceE2E, PoseJumpsBeyondTheBoundAreComputedWholeAndCounted) {
   const auto work = testing::FreshTempDir("ep-pose-jump");
   const uint32_t domain = testing::UniqueDomainId(44);
   const auto config = work / "epmapd.yaml";
-  std::ofstream(config) << "ep:\n  params: {\"max_rotation_step_rad\": \"0.00001\", "
-                           "\"max_translation_step_m\": \"0.000001\"}\n";
+  std::ofstream(config) << "ep:\n  params: {\"max_rotation_rate_rad_s\": \"0.0003\", "
+                           "\"max_translation_speed_m_s\": \"0.00003\"}\n";
   testing::Epmapd epmapd(domain, {"--config", config.string(), "--urdf", Urdf().string()}, work);
   ASSERT_TRUE(epmapd.WaitReady()) << epmapd.process().Output();
   Replay(domain, work, 15);

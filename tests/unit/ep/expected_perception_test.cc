@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include "perception/ep/ep_settings.h"
@@ -143,6 +144,25 @@ TEST(ExpectedPerception, APoseJumpIsComputedWholeAndCounted) {
   const auto next = ep.Process(f3.left, f3.right, f3.T_base_cam0, f3.stamp_ns);
   EXPECT_EQ(next->mode, FrameMode::kPredicted);
   EXPECT_LT(next->unexpected_share, 0.005);
+}
+
+TEST(ExpectedPerception, ThePoseJumpBoundIsARateNotAStepPerFrame) {
+  // The same 0.2 rad turn is a jump 1/30 s after the last frame (6 rad/s, bound 4.5 rad/s) and
+  // a turn to predict 1/10 s after it (2 rad/s: a slower camera, or a frame dropped).
+  const testing::SyntheticScene scene;
+  const Frame f0 = Render(scene, 0, false);
+  Frame turned;
+  turned.T_base_cam0 = testing::HeadPose(0.2, 0.0);
+  scene.Render(turned.T_base_cam0, &turned.left, &turned.right, &turned.disparity, &turned.square);
+  for (const auto& [interval_ns, expected] : {std::pair(33'333'333LL, FrameMode::kPoseJump),
+                                              std::pair(100'000'000LL, FrameMode::kPredicted)}) {
+    ExpectedPerception ep(scene.camera(), Params());
+    ep.Process(f0.left, f0.right, f0.T_base_cam0, f0.stamp_ns);
+    const auto res =
+        ep.Process(turned.left, turned.right, turned.T_base_cam0, f0.stamp_ns + interval_ns);
+    EXPECT_EQ(res->mode, expected) << interval_ns << " ns";
+    EXPECT_EQ(ep.counters().pose_jumps, expected == FrameMode::kPoseJump ? 1u : 0u);
+  }
 }
 
 TEST(ExpectedPerception, BadInputIsRefusedAndTheStateKept) {
