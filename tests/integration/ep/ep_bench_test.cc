@@ -116,6 +116,53 @@ TEST(EpBench, RefusesJointNamesTheUrdfLacksAndAUrdfWithoutCam0) {
   fs::remove_all(dir);
 }
 
+// A fixed rig on a mobile base (no kinematics, odometry0): the base slides sideways 3 cm a
+// frame in front of the synthetic room, nothing moves on its own.
+void WriteSlidingBaseSequence(const fs::path& root) {
+  const testing::SyntheticScene scene;
+  const auto& cam = scene.camera();
+  dataset::Writer w(root, true);
+  dataset::CameraSensor c;
+  c.width = cam.width;
+  c.height = cam.height;
+  c.fu = c.fv = cam.fx;
+  c.cu = cam.cx;
+  c.cv = cam.cy;
+  c.distortion = {0, 0, 0, 0};
+  c.rate_hz = 30;
+  w.WriteCameraSensor(0, c, "left");  // T_BS = identity: the camera is the base
+  c.T_BS(0, 3) = cam.baseline_m;
+  w.WriteCameraSensor(1, c, "right");
+  for (int k = 0; k < 10; ++k) {
+    const int64_t stamp = 1'000'000'000LL + k * 33'333'333LL;
+    const double x = 0.03 * k;
+    cv::Mat l, r, d, m;
+    scene.Render(Eigen::Isometry3d(Eigen::Translation3d(x, 0, 0)), &l, &r, &d, &m);
+    w.AddStereoFrame(stamp, l, r);
+    w.AddOdometry({stamp, x, 0, 0});
+    w.AddGtDisparity(stamp, d);
+    w.AddGtUnexpected(stamp, cv::Mat::zeros(l.size(), CV_8U));
+  }
+}
+
+TEST(EpBench, OnAMobileBaseTheCameraRidesOnTheOdometry) {
+  const fs::path dir = testing::FreshTempDir("ep-bench-base");
+  WriteSlidingBaseSequence(dir / "seq");
+  const auto [code, out] = Bench(
+      {"--dataset", (dir / "seq").string(), "--json", "--num-disparities", "48"}, dir / "log.txt");
+  ASSERT_EQ(code, 0) << out;
+  EXPECT_NE(out.find("\"pose_source\":\"fixed\""), std::string::npos) << out;
+  EXPECT_NE(out.find("\"base_odometry\":true"), std::string::npos) << out;
+  EXPECT_NE(out.find("\"pose_jumps\":0"), std::string::npos) << out;
+  // Nothing moves on its own: a prediction that ignored the base's motion would be off by a few
+  // pixels a frame and flag the room's texture.
+  const std::string key = "\"flagged_area_not_visible_max\":";
+  const size_t at = out.find(key);
+  ASSERT_NE(at, std::string::npos) << out;
+  EXPECT_LT(std::stod(out.substr(at + key.size())), 0.01) << out;
+  fs::remove_all(dir);
+}
+
 TEST(EpBench, RunsOnTheRealEurocExcerptAsAFixedRig) {
   EPMAP_REQUIRE_SHARED_DATA("euroc-v101-excerpt");
   const fs::path dir = testing::FreshTempDir("ep-bench-euroc");
