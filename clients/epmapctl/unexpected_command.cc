@@ -139,10 +139,15 @@ int RunUnexpected(const ClientOptions& options, const UnexpectedArgs& args) {
               static_cast<long long>(regions.stamp_ns()), 100.0 * regions.flagged_share(),
               regions.regions_size());
   for (const auto& r : regions.regions()) {
-    std::printf("  #%u box %dx%d+%d+%d, %u px, disparity %.1f px, base (%.3f, %.3f, %.3f) m%s\n",
+    std::printf("  #%u box %dx%d+%d+%d, %u px, disparity %.1f px, base (%.3f, %.3f, %.3f) m%s",
                 r.id(), r.width(), r.height(), r.x(), r.y(), r.area_px(), r.mean_disparity(),
                 r.centroid_base().x(), r.centroid_base().y(), r.centroid_base().z(),
                 r.base_corrected() ? " (eye-hand corrected)" : "");
+    if (r.has_centroid_odom()) {
+      std::printf(", odom (%.3f, %.3f, %.3f) m", r.centroid_odom().x(), r.centroid_odom().y(),
+                  r.centroid_odom().z());
+    }
+    std::printf("\n");
   }
   return 0;
 }

@@ -67,9 +67,14 @@ def main():
     try:
         regions = stub.GetUnexpectedRegions(pb2.GetUnexpectedRegionsRequest(min_area_px=100),
                                             timeout=10)
-        moving = [{"id": r.id, "area_px": r.area_px,
-                   "base_m": [round(r.centroid_base.x, 3), round(r.centroid_base.y, 3),
-                              round(r.centroid_base.z, 3)]} for r in regions.regions]
+        for r in regions.regions:
+            region = {"id": r.id, "area_px": r.area_px,
+                      "base_m": [round(r.centroid_base.x, 3), round(r.centroid_base.y, 3),
+                                 round(r.centroid_base.z, 3)]}
+            if r.HasField("centroid_odom"):  # a mobile base: also where it is in the odometry frame
+                region["odom_m"] = [round(r.centroid_odom.x, 3), round(r.centroid_odom.y, 3),
+                                    round(r.centroid_odom.z, 3)]
+            moving.append(region)
     except grpc.RpcError as error:
         # A service with expected perception disabled has no motion detector; say so, go on.
         if error.code() != grpc.StatusCode.FAILED_PRECONDITION:

@@ -113,6 +113,9 @@ grpc::Status MapServiceImpl::GetDisparity(grpc::ServerContext* context,
   if (snapshot->T_base_cam0) {
     ToProto(*snapshot->T_base_cam0, "base", "cam0_optical", out->mutable_camera_pose());
   }
+  if (snapshot->T_odom_base) {
+    ToProto(*snapshot->T_odom_base, "odom", "base", out->mutable_base_pose());
+  }
   return grpc::Status::OK;
 }
 

@@ -47,6 +47,7 @@ void RegionToProto(const UnexpectedRegionInfo& r, int64_t stamp_ns, uint64_t fra
   if (r.has_centroid) {
     ToProto(r.centroid_camera, out->mutable_centroid_camera());
     ToProto(r.centroid_base, out->mutable_centroid_base());
+    if (r.centroid_odom) ToProto(*r.centroid_odom, out->mutable_centroid_odom());
   } else {
     // No pixel of the region had a disparity: its position is unknown, said as NaN.
     const Eigen::Vector3d unknown = Eigen::Vector3d::Constant(std::nan(""));

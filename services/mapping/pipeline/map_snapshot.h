@@ -19,6 +19,17 @@
 
 namespace epmap::mapping {
 
+// Where the camera was at one frame: on the base (the chain), and where the base was in the
+// odometry frame when odometry drives the pose source (a mobile base). The world stands still
+// in the odometry frame, so that is the frame the EP predicts in.
+struct FramePose {
+  Eigen::Isometry3d T_base_cam0 = Eigen::Isometry3d::Identity();
+  std::optional<Eigen::Isometry3d> T_odom_base;
+  Eigen::Isometry3d T_static_cam0() const {
+    return T_odom_base ? *T_odom_base * T_base_cam0 : T_base_cam0;
+  }
+};
+
 struct MapSnapshot {
   uint64_t frame_index = 0;  // 1 for the first processed frame
   int64_t stamp_ns = 0;
@@ -27,7 +38,8 @@ struct MapSnapshot {
   int num_disparities = 0;
   cv::Mat disparity;                             // CV_32FC1 px, NaN unknown (rectified cam0)
   cv::Mat left_rectified;                        // the image the disparity belongs to
-  std::optional<Eigen::Isometry3d> T_base_cam0;  // when a kinematic/odometry pose is known
+  std::optional<Eigen::Isometry3d> T_base_cam0;  // when a kinematic pose is known
+  std::optional<Eigen::Isometry3d> T_odom_base;  // mobile base: from odometry
   double recomputed_share = 1.0;  // share of pixels whose disparity was computed this frame
   double valid_share = 0.0;       // share of pixels with a finite disparity
   // The expected-perception result of this frame (null when EP is disabled): predicted image,
@@ -35,7 +47,7 @@ struct MapSnapshot {
   std::shared_ptr<const ep::EpResult> ep;
   int grid_step = 1;  // the comparison grid's step (ep->error etc. are size / grid_step)
   // What moved on its own (null when EP is disabled), with centroids in the base frame as the
-  // active eye-hand model corrects them.
+  // active eye-hand model corrects them (and in the odometry frame on a mobile base).
   std::shared_ptr<const UnexpectedFrame> unexpected;
   // Mobile-base mode: the perceptual map, occupancy grid and poses after the newest key frame
   // (null before the first key frame, or when not in mobile-base mode). Shared between

@@ -194,7 +194,10 @@ void Pipeline::Process(StereoFrame& frame) {
     snapshot->disparity = matcher_.Compute(left, right);
     stage_ms_.Add("sgbm", MsSince(t0));
     full_refreshes_++;
-    snapshot->T_base_cam0 = pose;
+    if (pose) {
+      snapshot->T_base_cam0 = pose->T_base_cam0;
+      snapshot->T_odom_base = pose->T_odom_base;
+    }
     snapshot->recomputed_share = 1.0;
   }
   if (config_.maps.enabled && mode() == "mobile-base") {

@@ -60,14 +60,15 @@ class Pipeline {
   void Process(StereoFrame& frame);
   // The rectifier for the current calibration; nullptr (and a counted rejection) if none.
   const stereo::Rectifier* CurrentRectifier(const StereoFrame& frame);
-  // The raw (unrectified) cam0 pose in the base frame at a stamp, from the internal model;
-  // nullopt with *reason when its inputs are missing (pipeline_ep.cc).
-  std::optional<Eigen::Isometry3d> PoseAt(int64_t stamp_ns, std::string* reason);
+  // The raw (unrectified) cam0 pose in the base frame at a stamp, from the internal model, and
+  // on a mobile base the base's pose in the odometry frame; nullopt with *reason when their
+  // inputs are missing (pipeline_ep.cc).
+  std::optional<FramePose> PoseAt(int64_t stamp_ns, std::string* reason);
   void SetUpPoseSource();
   // The EP map of this frame into the snapshot (pipeline_ep.cc).
   void RunExpectedPerception(const StereoFrame& frame, const stereo::Rectifier& rectifier,
                              const cv::Mat& left, const cv::Mat& right,
-                             const std::optional<Eigen::Isometry3d>& raw_pose,
+                             const std::optional<FramePose>& raw_pose,
                              const std::string& pose_reason, MapSnapshot& snapshot);
   // Mobile-base mode: hands key frames to the mobile mapper and puts its maps into the
   // snapshot (pipeline_maps.cc).

@@ -60,44 +60,49 @@ std::string Pipeline::EffectivePoseSource() const {
   return "fixed";
 }
 
-std::optional<Eigen::Isometry3d> Pipeline::PoseAt(int64_t stamp_ns, std::string* reason) {
+std::optional<FramePose> Pipeline::PoseAt(int64_t stamp_ns, std::string* reason) {
   const std::string source = EffectivePoseSource();
-  if (source == "fixed") return Eigen::Isometry3d::Identity();
+  if (source == "fixed") return FramePose{};
   const auto wait = std::chrono::nanoseconds(config_.joints_wait_ns);
   if (source == "learned") {
     const auto joints =
         sensors_.JointsAt(stamp_ns, learned_inputs_, config_.joints_max_gap_ns, wait, reason);
     if (!joints) return std::nullopt;
-    return learned_->CameraPose({*joints, std::nullopt});
+    return FramePose{learned_->CameraPose({*joints, std::nullopt}), std::nullopt};
   }
   // urdf and odometry: the chain from the base to cam0_optical.
   const auto joints =
       sensors_.JointsAt(stamp_ns, chain_->joint_names(), config_.joints_max_gap_ns, wait, reason);
   if (!joints) return std::nullopt;
-  const Eigen::Isometry3d T_base_cam0 = chain_->Cam0Pose(*joints);
-  if (source == "urdf") return T_base_cam0;
+  FramePose pose;
+  pose.T_base_cam0 = chain_->Cam0Pose(*joints);
+  if (source == "urdf") return pose;
   // odometry: the base's planar pose in the odometry frame, then the chain.
   const auto odom = sensors_.OdometryAt(stamp_ns, config_.joints_max_gap_ns, wait, reason);
   if (!odom) return std::nullopt;
   Eigen::Isometry3d T_odom_base = Eigen::Isometry3d::Identity();
   T_odom_base.translation() = Eigen::Vector3d(odom->x, odom->y, 0.0);
   T_odom_base.linear() = Eigen::AngleAxisd(odom->theta, Eigen::Vector3d::UnitZ()).matrix();
-  return T_odom_base * T_base_cam0;
+  pose.T_odom_base = T_odom_base;
+  return pose;
 }
 
 void Pipeline::RunExpectedPerception(const StereoFrame& frame, const stereo::Rectifier& rectifier,
                                      const cv::Mat& left, const cv::Mat& right,
-                                     const std::optional<Eigen::Isometry3d>& raw_pose,
+                                     const std::optional<FramePose>& raw_pose,
                                      const std::string& pose_reason, MapSnapshot& snapshot) {
   const stereo::RectifiedGeometry& geometry = rectifier.geometry();
   if (!ep_ || !SameGeometry(ep_->camera(), geometry)) {
     if (ep_) events_.Increment("ep_restarted_new_rectification");
     ep_ = std::make_unique<ep::ExpectedPerception>(geometry, ep_params_);
   }
-  // The rectified left camera's pose: the raw camera's, turned by the rectification.
+  // The rectified left camera's pose: the raw camera's, turned by the rectification; the EP
+  // predicts in the frame where the world stands still (odometry's on a mobile base).
   Eigen::Isometry3d T_base_rect = Eigen::Isometry3d::Identity();
+  std::optional<Eigen::Isometry3d> T_odom_base;
   if (raw_pose) {
-    T_base_rect = *raw_pose * RawToRectified(rectifier);
+    T_base_rect = raw_pose->T_base_cam0 * RawToRectified(rectifier);
+    T_odom_base = raw_pose->T_odom_base;
   } else {
     // Without a pose nothing can be predicted: the map restarts from this frame, computed whole.
     events_.Increment("ep_restart_no_pose:" + pose_reason);
@@ -106,7 +111,8 @@ void Pipeline::RunExpectedPerception(const StereoFrame& frame, const stereo::Rec
 
   std::shared_ptr<const ep::EpResult> result;
   try {
-    result = ep_->Process(left, right, T_base_rect, frame.stamp_ns);
+    result = ep_->Process(left, right, T_odom_base ? *T_odom_base * T_base_rect : T_base_rect,
+                          frame.stamp_ns);
   } catch (const std::invalid_argument& e) {
     // The EP keeps its state on refused input; the frame is counted and skipped.
     counters_.rejected.Increment("pipeline:ep_refused");
@@ -140,17 +146,20 @@ void Pipeline::RunExpectedPerception(const StereoFrame& frame, const stereo::Rec
     info.mean_disparity_px = region.mean_disparity_px;
     info.has_centroid = region.has_centroid;
     info.centroid_camera = region.centroid_cam0;
-    info.centroid_base = region.centroid_base;
+    // The EP's own frame is the odometry frame on a mobile base: the base frame from the chain.
+    info.centroid_base = T_base_rect * region.centroid_cam0;
     if (region.has_centroid && correct) {
       // Paper 001: stereo's points made consistent with the kinematics by the eye-hand model.
-      info.centroid_base = active_models_->CorrectVisionPoint(region.centroid_base);
+      info.centroid_base = active_models_->CorrectVisionPoint(info.centroid_base);
       info.base_corrected = true;
     }
+    if (T_odom_base) info.centroid_odom = *T_odom_base * info.centroid_base;
     unexpected->regions.push_back(info);
   }
 
   snapshot.disparity = result->disparity;
   snapshot.T_base_cam0 = T_base_rect;
+  snapshot.T_odom_base = T_odom_base;
   snapshot.recomputed_share = result->recomputed_share;
   snapshot.grid_step = ep_params_.prediction.image_step;
   snapshot.ep = result;

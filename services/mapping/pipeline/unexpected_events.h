@@ -12,6 +12,7 @@
 #include <memory>
 #include <mutex>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <vector>
 
 namespace epmap::mapping {
@@ -25,6 +26,8 @@ struct UnexpectedRegionInfo {
   Eigen::Vector3d centroid_camera = Eigen::Vector3d::Zero();  // cam0 (rectified) frame, m
   Eigen::Vector3d centroid_base = Eigen::Vector3d::Zero();    // base frame, m
   bool base_corrected = false;  // the active eye-hand model was applied to centroid_base
+  // Mobile base: centroid_base in the odometry frame at the frame's stamp.
+  std::optional<Eigen::Vector3d> centroid_odom;
 };
 
 struct UnexpectedFrame {

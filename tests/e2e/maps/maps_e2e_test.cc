@@ -389,6 +389,18 @@ TEST_F(MapsFromPublishedFrames, BadInputIsCountedAndTheMapsStayIntact) {
   EXPECT_NEAR(pose.odometry().x(), 0.3 * 9, 1e-6);
   EXPECT_TRUE(std::isfinite(pose.corrected().x()) && std::isfinite(pose.corrected().theta()));
   EXPECT_LT(std::abs(pose.difference().theta()), 0.05);
+  // The newest disparity's camera pose is the chain's (base -> cam0, near the base whatever the
+  // odometry says), with the base's odometry pose beside it.
+  grpc::ClientContext disparity_context;
+  v1::DisparityMap disparity;
+  ASSERT_TRUE(epmapd.stub().GetDisparity(&disparity_context, {}, &disparity).ok());
+  EXPECT_EQ(disparity.stamp_ns(), stamp(9));
+  EXPECT_EQ(disparity.camera_pose().parent_frame(), "base");
+  EXPECT_LT(disparity.camera_pose().translation().x(), 0.5)
+      << disparity.camera_pose().DebugString();
+  ASSERT_TRUE(disparity.has_base_pose());
+  EXPECT_EQ(disparity.base_pose().parent_frame(), "odom");
+  EXPECT_NEAR(disparity.base_pose().translation().x(), 0.3 * 9, 1e-6);
   grpc::ClientContext grid_context;
   v1::GetOccupancyGridRequest request;
   request.set_layer(3);  // the default grid has 3 height bands
