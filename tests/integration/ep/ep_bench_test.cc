@@ -22,6 +22,21 @@ namespace fs = std::filesystem;
 const std::vector<std::string> kJoints = {"neck_pitch", "neck_roll",    "neck_yaw",
                                           "eyes_tilt",  "left_eye_pan", "right_eye_pan"};
 
+// The synthetic scene's rectified 30 Hz pair: cam0 at the body origin, cam1 a baseline along x.
+void WriteRectifiedRig(const stereo::RectifiedGeometry& cam, dataset::Writer* w) {
+  dataset::CameraSensor c;
+  c.width = cam.width;
+  c.height = cam.height;
+  c.fu = c.fv = cam.fx;
+  c.cu = cam.cx;
+  c.cv = cam.cy;
+  c.distortion = {0, 0, 0, 0};
+  c.rate_hz = 30;
+  w->WriteCameraSensor(0, c, "left");
+  c.T_BS(0, 3) = cam.baseline_m;
+  w->WriteCameraSensor(1, c, "right");
+}
+
 // A 14-frame head sequence: the test head's neck turning, the synthetic room, a square moving
 // through it. Images are rendered from the chain's own poses (world = the first camera frame).
 void WriteHeadSequence(const fs::path& root, const std::string& urdf,
@@ -32,17 +47,7 @@ void WriteHeadSequence(const fs::path& root, const std::string& urdf,
   chain.BindJointOrder(kJoints);
   const Eigen::Isometry3d T0 = chain.Cam0Pose({0, 0, 0, 0, 0, 0});
   dataset::Writer w(root, true);
-  dataset::CameraSensor c;
-  c.width = cam.width;
-  c.height = cam.height;
-  c.fu = c.fv = cam.fx;
-  c.cu = cam.cx;
-  c.cv = cam.cy;
-  c.distortion = {0, 0, 0, 0};
-  c.rate_hz = 30;
-  w.WriteCameraSensor(0, c, "left");
-  c.T_BS(0, 3) = cam.baseline_m;
-  w.WriteCameraSensor(1, c, "right");
+  WriteRectifiedRig(cam, &w);
   w.SetJointNames(joint_names);
   w.WriteUrdf(urdf);
   for (int k = 0; k < 14; ++k) {
@@ -122,17 +127,7 @@ void WriteSlidingBaseSequence(const fs::path& root) {
   const testing::SyntheticScene scene;
   const auto& cam = scene.camera();
   dataset::Writer w(root, true);
-  dataset::CameraSensor c;
-  c.width = cam.width;
-  c.height = cam.height;
-  c.fu = c.fv = cam.fx;
-  c.cu = cam.cx;
-  c.cv = cam.cy;
-  c.distortion = {0, 0, 0, 0};
-  c.rate_hz = 30;
-  w.WriteCameraSensor(0, c, "left");  // T_BS = identity: the camera is the base
-  c.T_BS(0, 3) = cam.baseline_m;
-  w.WriteCameraSensor(1, c, "right");
+  WriteRectifiedRig(cam, &w);  // cam0's T_BS = identity: on a base, the camera is the base
   for (int k = 0; k < 10; ++k) {
     const int64_t stamp = 1'000'000'000LL + k * 33'333'333LL;
     const double x = 0.03 * k;
