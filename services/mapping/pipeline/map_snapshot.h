@@ -25,9 +25,6 @@ namespace epmap::mapping {
 struct FramePose {
   Eigen::Isometry3d T_base_cam0 = Eigen::Isometry3d::Identity();
   std::optional<Eigen::Isometry3d> T_odom_base;
-  Eigen::Isometry3d T_static_cam0() const {
-    return T_odom_base ? *T_odom_base * T_base_cam0 : T_base_cam0;
-  }
 };
 
 struct MapSnapshot {
