@@ -53,6 +53,7 @@ void RegionToProto(const UnexpectedRegionInfo& r, int64_t stamp_ns, uint64_t fra
     const Eigen::Vector3d unknown = Eigen::Vector3d::Constant(std::nan(""));
     ToProto(unknown, out->mutable_centroid_camera());
     ToProto(unknown, out->mutable_centroid_base());
+    if (r.centroid_odom) ToProto(unknown, out->mutable_centroid_odom());
   }
   out->set_base_corrected(r.base_corrected);
 }

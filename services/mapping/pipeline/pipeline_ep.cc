@@ -136,25 +136,13 @@ void Pipeline::RunExpectedPerception(const StereoFrame& frame, const stereo::Rec
   unexpected->stamp_ns = frame.stamp_ns;
   unexpected->frame_index = snapshot.frame_index;
   unexpected->flagged_share = result->unexpected_share;
-  const bool correct = active_models_ && active_models_->eye_hand();
+  std::function<Eigen::Vector3d(const Eigen::Vector3d&)> correct;
+  if (active_models_ && active_models_->eye_hand()) {
+    correct = [this](const Eigen::Vector3d& x) { return active_models_->CorrectVisionPoint(x); };
+  }
   uint32_t id = 0;
   for (const auto& region : result->regions) {
-    UnexpectedRegionInfo info;
-    info.id = ++id;
-    info.box = region.box;
-    info.area_px = region.area_px;
-    info.mean_disparity_px = region.mean_disparity_px;
-    info.has_centroid = region.has_centroid;
-    info.centroid_camera = region.centroid_cam0;
-    // The EP's own frame is the odometry frame on a mobile base: the base frame from the chain.
-    info.centroid_base = T_base_rect * region.centroid_cam0;
-    if (region.has_centroid && correct) {
-      // Paper 001: stereo's points made consistent with the kinematics by the eye-hand model.
-      info.centroid_base = active_models_->CorrectVisionPoint(info.centroid_base);
-      info.base_corrected = true;
-    }
-    if (T_odom_base) info.centroid_odom = *T_odom_base * info.centroid_base;
-    unexpected->regions.push_back(info);
+    unexpected->regions.push_back(DescribeRegion(region, ++id, T_base_rect, T_odom_base, correct));
   }
 
   snapshot.disparity = result->disparity;

@@ -4,6 +4,26 @@
 
 namespace epmap::mapping {
 
+UnexpectedRegionInfo DescribeRegion(
+    const ep::Region& region, uint32_t id, const Eigen::Isometry3d& T_base_cam0,
+    const std::optional<Eigen::Isometry3d>& T_odom_base,
+    const std::function<Eigen::Vector3d(const Eigen::Vector3d&)>& correct) {
+  UnexpectedRegionInfo info;
+  info.id = id;
+  info.box = region.box;
+  info.area_px = region.area_px;
+  info.mean_disparity_px = region.mean_disparity_px;
+  info.has_centroid = region.has_centroid;
+  info.centroid_camera = region.centroid_cam0;
+  info.centroid_base = T_base_cam0 * region.centroid_cam0;
+  if (region.has_centroid && correct) {
+    info.centroid_base = correct(info.centroid_base);
+    info.base_corrected = true;
+  }
+  if (T_odom_base) info.centroid_odom = *T_odom_base * info.centroid_base;
+  return info;
+}
+
 std::shared_ptr<const UnexpectedFrame> UnexpectedEventHub::Subscription::Next(
     std::chrono::milliseconds timeout) {
   std::unique_lock lock(mutex_);

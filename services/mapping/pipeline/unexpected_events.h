@@ -4,16 +4,19 @@
 // regions to every live WatchUnexpected stream. Each subscriber has a bounded queue: a slow
 // client loses its oldest events (counted), never the pipeline's time.
 
-#include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <chrono>
 #include <condition_variable>
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <opencv2/core.hpp>
 #include <optional>
 #include <vector>
+
+#include "perception/ep/comparator/regions.h"
 
 namespace epmap::mapping {
 
@@ -29,6 +32,16 @@ struct UnexpectedRegionInfo {
   // Mobile base: centroid_base in the odometry frame at the frame's stamp.
   std::optional<Eigen::Vector3d> centroid_odom;
 };
+
+// One EP region as the service reports it. T_base_cam0: the (rectified) camera on the base, from
+// the chain; T_odom_base: the base in the odometry frame on a mobile base (the EP itself works in
+// that frame there, so its own "base" centroid is not the base's). `correct`, when set, is the
+// active eye-hand model (paper 001: stereo's points made consistent with the kinematics), applied
+// to the base-frame centroid before it is carried into the odometry frame.
+UnexpectedRegionInfo DescribeRegion(
+    const ep::Region& region, uint32_t id, const Eigen::Isometry3d& T_base_cam0,
+    const std::optional<Eigen::Isometry3d>& T_odom_base,
+    const std::function<Eigen::Vector3d(const Eigen::Vector3d&)>& correct = nullptr);
 
 struct UnexpectedFrame {
   int64_t stamp_ns = 0;
