@@ -392,8 +392,11 @@ TEST_F(MapsFromPublishedFrames, BadInputIsCountedAndTheMapsStayIntact) {
   // The newest disparity's camera pose is the chain's (base -> cam0, near the base whatever the
   // odometry says), with the base's odometry pose beside it.
   grpc::ClientContext disparity_context;
+  v1::GetDisparityRequest newest;
+  newest.set_newer_than_ns(stamp(9) - 1);  // the last frame's, however the status raced it
+  newest.set_wait_ms(5000);
   v1::DisparityMap disparity;
-  ASSERT_TRUE(epmapd.stub().GetDisparity(&disparity_context, {}, &disparity).ok());
+  ASSERT_TRUE(epmapd.stub().GetDisparity(&disparity_context, newest, &disparity).ok());
   EXPECT_EQ(disparity.stamp_ns(), stamp(9));
   EXPECT_EQ(disparity.camera_pose().parent_frame(), "base");
   EXPECT_LT(disparity.camera_pose().translation().x(), 0.5)
