@@ -203,6 +203,13 @@ PublishReport Publish(const Scenario& scenario, const PublishOptions& o) {
     Log(o, "warning: no reader matched both image topics within " +
                std::to_string(o.wait_for_readers.count()) + " ms; sending anyway");
   }
+  // The other topics are optional (a viewer may read images only), so each gets at most the
+  // grace period to match: a reader that exists, discovered a little later than the images' on
+  // a busy host, then does not miss the first joint state or CameraInfo.
+  left_info.WaitForReaders(1, o.grace);
+  right_info.WaitForReaders(1, o.grace);
+  joints.WaitForReaders(1, o.grace);
+  if (odom) odom->WaitForReaders(1, o.grace);
   std::this_thread::sleep_for(o.grace);
 
   const dataset::CameraSensor cam0 = scenario.cam0(), cam1 = scenario.cam1();
@@ -259,9 +266,15 @@ PublishReport Publish(const Scenario& scenario, const PublishOptions& o) {
   frames.Stop();
   report.frames_sent = sent;
   report.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
-  // Let reliable readers catch up before the participant goes away.
-  left.WaitForAcknowledgments(std::chrono::milliseconds(2000));
-  right.WaitForAcknowledgments(std::chrono::milliseconds(2000));
+  // Let reliable readers catch up before the participant goes away: every topic, not only the
+  // images (a reader counting joint states or CameraInfos could miss the last ones on a busy host).
+  const auto ack_wait = std::chrono::milliseconds(2000);
+  left.WaitForAcknowledgments(ack_wait);
+  right.WaitForAcknowledgments(ack_wait);
+  left_info.WaitForAcknowledgments(ack_wait);
+  right_info.WaitForAcknowledgments(ack_wait);
+  joints.WaitForAcknowledgments(ack_wait);
+  if (odom) odom->WaitForAcknowledgments(ack_wait);
   std::this_thread::sleep_for(o.grace);
   if (report.max_late_ms > 100) {
     Log(o, "warning: " + std::to_string(report.late_frames) + " of " + std::to_string(sent) +
