@@ -53,6 +53,7 @@ std::vector<std::pair<std::string, Field>> Fields(EpParams* p) {
       {"max_rotation_rate_rad_s", &p->max_rotation_rate_rad_s},
       {"max_translation_speed_m_s", &p->max_translation_speed_m_s},
       {"min_frame_interval_s", &p->min_frame_interval_s},
+      {"max_frame_interval_s", &p->max_frame_interval_s},
       {"recompute_margin_px", &p->recompute_margin_px},
       {"border_batch_px", &p->border_batch_px},
       {"uncovered_margin_px", &p->uncovered_margin_px},

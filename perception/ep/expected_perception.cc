@@ -177,10 +177,10 @@ void EpParams::Validate() const {
     throw std::invalid_argument("EP: max_recompute_share must be > 0 (>= 1 disables it)");
   }
   if (!(max_rotation_rate_rad_s > 0) || !(max_translation_speed_m_s > 0) ||
-      !(min_frame_interval_s > 0)) {
+      !(min_frame_interval_s > 0) || !(max_frame_interval_s >= min_frame_interval_s)) {
     throw std::invalid_argument(
         "EP: the pose jump bounds (max_rotation_rate_rad_s, max_translation_speed_m_s, "
-        "min_frame_interval_s) must be > 0");
+        "min_frame_interval_s) must be > 0 and max_frame_interval_s >= min_frame_interval_s");
   }
   if (recompute_margin_px < 0) throw std::invalid_argument("EP: recompute_margin_px must be >= 0");
   if (border_batch_px < 0) throw std::invalid_argument("EP: border_batch_px must be >= 0");
@@ -254,8 +254,8 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
   if (has_state_) {
     const Eigen::Isometry3d T_cur_prev = T_base_cam0.inverse() * last_T_base_cam0_;
     const double angle = Eigen::AngleAxisd(T_cur_prev.linear()).angle();
-    const double dt_s = std::max(static_cast<double>(stamp_ns - last_stamp_ns_) * 1e-9,
-                                 params_.min_frame_interval_s);
+    const double dt_s = std::clamp(static_cast<double>(stamp_ns - last_stamp_ns_) * 1e-9,
+                                   params_.min_frame_interval_s, params_.max_frame_interval_s);
     if (angle > params_.max_rotation_rate_rad_s * dt_s ||
         T_cur_prev.translation().norm() > params_.max_translation_speed_m_s * dt_s) {
       mode = FrameMode::kPoseJump;

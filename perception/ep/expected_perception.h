@@ -67,10 +67,13 @@ struct EpParams {
   // no jump: the defaults are the 0.15 rad and 5 cm per frame of the 30 Hz head. (As steps they
   // rejected a 10 Hz base driving at 0.5 m/s: 1113 of the building run's 1849 frames.) The
   // interval is taken as at least min_frame_interval_s, so that stamps closer than any camera's
-  // frame period do not turn encoder noise into jumps.
+  // frame period do not turn encoder noise into jumps, and as at most max_frame_interval_s, so
+  // that a glitch cannot hide in a dropout (after a long gap, a motion beyond what that interval
+  // allows is computed whole).
   double max_rotation_rate_rad_s = 4.5;
   double max_translation_speed_m_s = 1.5;
   double min_frame_interval_s = 0.01;
+  double max_frame_interval_s = 0.25;
   // Unexpected regions are grown by this margin before recomputing (their edges change too).
   int recompute_margin_px = 3;
   // Newly visible content along an image border is recomputed once the strip is this thick

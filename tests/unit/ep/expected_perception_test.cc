@@ -148,20 +148,28 @@ TEST(ExpectedPerception, APoseJumpIsComputedWholeAndCounted) {
 
 TEST(ExpectedPerception, ThePoseJumpBoundIsARateNotAStepPerFrame) {
   // The same 0.2 rad turn is a jump 1/30 s after the last frame (6 rad/s, bound 4.5 rad/s) and
-  // a turn to predict 1/10 s after it (2 rad/s: a slower camera, or a frame dropped).
+  // a turn to predict 1/10 s after it (2 rad/s: a slower camera, or a frame dropped). After a
+  // 1 s dropout the interval counts as 0.25 s: 0.2 rad is predicted, a 1.5 rad glitch is not.
   const testing::SyntheticScene scene;
   const Frame f0 = Render(scene, 0, false);
-  Frame turned;
-  turned.T_base_cam0 = testing::HeadPose(0.2, 0.0);
-  scene.Render(turned.T_base_cam0, &turned.left, &turned.right, &turned.disparity, &turned.square);
-  for (const auto& [interval_ns, expected] : {std::pair(33'333'333LL, FrameMode::kPoseJump),
-                                              std::pair(100'000'000LL, FrameMode::kPredicted)}) {
+  struct Case {
+    int64_t interval_ns;
+    double yaw;
+    FrameMode expected;
+  };
+  for (const Case& c :
+       {Case{33'333'333, 0.2, FrameMode::kPoseJump}, Case{100'000'000, 0.2, FrameMode::kPredicted},
+        Case{1'000'000'000, 0.2, FrameMode::kPredicted},
+        Case{1'000'000'000, 1.5, FrameMode::kPoseJump}}) {
+    Frame turned;
+    turned.T_base_cam0 = testing::HeadPose(c.yaw, 0.0);
+    scene.Render(turned.T_base_cam0, &turned.left, &turned.right);
     ExpectedPerception ep(scene.camera(), Params());
     ep.Process(f0.left, f0.right, f0.T_base_cam0, f0.stamp_ns);
     const auto res =
-        ep.Process(turned.left, turned.right, turned.T_base_cam0, f0.stamp_ns + interval_ns);
-    EXPECT_EQ(res->mode, expected) << interval_ns << " ns";
-    EXPECT_EQ(ep.counters().pose_jumps, expected == FrameMode::kPoseJump ? 1u : 0u);
+        ep.Process(turned.left, turned.right, turned.T_base_cam0, f0.stamp_ns + c.interval_ns);
+    EXPECT_EQ(res->mode, c.expected) << c.yaw << " rad after " << c.interval_ns << " ns";
+    EXPECT_EQ(ep.counters().pose_jumps, c.expected == FrameMode::kPoseJump ? 1u : 0u);
   }
 }
 
