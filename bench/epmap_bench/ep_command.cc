@@ -217,10 +217,7 @@ PoseFn PoseFromSource(const Dataset& d, const Rig& rig,
       throw std::runtime_error("no odometry reading near frame " +
                                std::to_string(d.frames[i].stamp_ns));
     }
-    Eigen::Isometry3d T_odom_base = Eigen::Isometry3d::Identity();
-    T_odom_base.translation() = Eigen::Vector3d(odom->x, odom->y, 0.0);
-    T_odom_base.linear() = Eigen::AngleAxisd(odom->theta, Eigen::Vector3d::UnitZ()).matrix();
-    return T_odom_base * T_base_cam0;
+    return epmap::internal_model::BaseOnOdometry(odom->x, odom->y, odom->theta) * T_base_cam0;
   };
 }
 

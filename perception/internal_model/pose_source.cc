@@ -71,4 +71,11 @@ Eigen::Isometry3d FixedPoseSource::CameraPose(const PoseInput&) const {
   return T_base_cam0_;
 }
 
+Eigen::Isometry3d BaseOnOdometry(double x, double y, double theta) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.translation() = Eigen::Vector3d(x, y, 0.0);
+  T.linear() = Eigen::AngleAxisd(theta, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  return T;
+}
+
 }  // namespace epmap::internal_model

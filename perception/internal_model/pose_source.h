@@ -82,6 +82,10 @@ class FixedPoseSource final : public PoseSource {
   Eigen::Isometry3d T_base_cam0_;
 };
 
+// A mobile base's planar odometry reading (x, y in metres, theta in radians about z) as the
+// base's pose in the odometry frame: the camera rides on it, T_odom_cam0 = T_odom_base T_base_cam0.
+Eigen::Isometry3d BaseOnOdometry(double x, double y, double theta);
+
 // Throws std::invalid_argument (prefixed by `what`) unless T is finite with an orthonormal,
 // right-handed rotation (tolerance 1e-6).
 void CheckRigid(const Eigen::Isometry3d& T, const std::string& what);

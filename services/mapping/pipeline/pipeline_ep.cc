@@ -80,10 +80,7 @@ std::optional<FramePose> Pipeline::PoseAt(int64_t stamp_ns, std::string* reason)
   // odometry: the base's planar pose in the odometry frame, then the chain.
   const auto odom = sensors_.OdometryAt(stamp_ns, config_.joints_max_gap_ns, wait, reason);
   if (!odom) return std::nullopt;
-  Eigen::Isometry3d T_odom_base = Eigen::Isometry3d::Identity();
-  T_odom_base.translation() = Eigen::Vector3d(odom->x, odom->y, 0.0);
-  T_odom_base.linear() = Eigen::AngleAxisd(odom->theta, Eigen::Vector3d::UnitZ()).matrix();
-  pose.T_odom_base = T_odom_base;
+  pose.T_odom_base = internal_model::BaseOnOdometry(odom->x, odom->y, odom->theta);
   return pose;
 }
 

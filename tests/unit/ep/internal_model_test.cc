@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <numbers>
 #include <random>
 
 #include "perception/internal_model/learned_pose_model.h"
@@ -81,6 +82,12 @@ TEST(PoseSources, DirectAndFixed) {
   EXPECT_THROW(direct.CameraPose(PoseInput{{}, bad}), std::invalid_argument);
   internal_model::FixedPoseSource fixed(T);
   EXPECT_TRUE(fixed.CameraPose(PoseInput{{0.5}, std::nullopt}).isApprox(T));
+}
+
+TEST(PoseSources, TheBaseOnOdometryTurnsAboutTheVerticalAxis) {
+  // A base at (2, 1) facing +y: a point 1 m ahead of it, 0.5 m up, is at (2, 2, 0.5).
+  const Eigen::Isometry3d T = internal_model::BaseOnOdometry(2.0, 1.0, std::numbers::pi / 2);
+  EXPECT_TRUE((T * Eigen::Vector3d(1, 0, 0.5)).isApprox(Eigen::Vector3d(2, 2, 0.5)));
 }
 
 // Sec. III: 3 neck inputs, 10 hidden units, 12 outputs, 70/15/15, 300 samples, trained until the
