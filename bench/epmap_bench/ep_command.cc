@@ -167,6 +167,8 @@ struct Frame {
   int64_t stamp_ns = 0;
   cv::Mat left, right;
   cv::Mat gt_disparity, gt_unexpected;
+  std::optional<Eigen::Isometry3d> gt_T_world_cam0;  // when the dataset has it for this frame
+  std::vector<Eigen::Vector3d> gt_movers;            // centres (world frame), gt_movers0
 };
 
 cv::Mat Grey(const cv::Mat& m) {
@@ -190,6 +192,18 @@ Frame LoadFrame(const Dataset& d, const Rig& rig, size_t i) {
   rig.rectifier.Rectify(Grey(l), Grey(r), out.left, out.right);
   out.gt_disparity = epmap::dataset::LoadGtDisparity(d, f.stamp_ns);
   out.gt_unexpected = epmap::dataset::LoadGtUnexpected(d, f.stamp_ns);
+  const auto pose = std::lower_bound(
+      d.gt_camera_pose.begin(), d.gt_camera_pose.end(), f.stamp_ns,
+      [](const epmap::dataset::PoseSample& p, int64_t stamp) { return p.stamp_ns < stamp; });
+  if (pose != d.gt_camera_pose.end() && pose->stamp_ns == f.stamp_ns) {
+    out.gt_T_world_cam0 = pose->pose;
+  }
+  for (auto m = std::lower_bound(
+           d.gt_movers.begin(), d.gt_movers.end(), f.stamp_ns,
+           [](const epmap::dataset::MoverSample&s, int64_t stamp) { return s.stamp_ns < stamp; });
+       m != d.gt_movers.end() && m->stamp_ns == f.stamp_ns; ++m) {
+    out.gt_movers.push_back(m->centre);
+  }
   return out;
 }
 
@@ -292,6 +306,12 @@ struct PassResult {
   // (what C should learn to attenuate) and the moving object's (what must stay bright).
   double static_e_sum = 0, static_a_sum = 0, moving_e_sum = 0, moving_a_sum = 0;
   std::vector<double> iou, flagged_not_visible;
+  // Of the frames where the moving thing is visible, those with a prediction to compare (not
+  // the first frame or a pose jump, computed whole), their IoU, those whose largest region
+  // touching the truth exists (detected), and that region's centroid's distance on the floor
+  // (world x, y) from the thing's true centre (gt_movers0).
+  std::vector<double> iou_compared, mover_centroid_error_m;
+  size_t visible_detected = 0;
   std::vector<double> predict_ms, compare_ms, plan_ms, stereo_ms, fuse_ms;
   epmap::stereo::DisparityScore ep_all, ep_first, ep_last, full_all, full_first, full_last;
   epmap::ep::EpCounters counters;
@@ -306,6 +326,24 @@ void Add(epmap::stereo::DisparityScore* total, const epmap::stereo::DisparitySco
 
 double Bad(const epmap::stereo::DisparityScore& s) {
   return s.gt_pixels ? s.bad_counting_unknown() : kNaN;
+}
+
+// Whether a region of `e` touches the true moving thing (largest first) and, when the dataset
+// says where the thing is, how far that region's centroid lies from its centre on the floor.
+void ScoreDetection(const epmap::ep::EpResult& e, const Frame& f,
+                    const Eigen::Isometry3d& T_cam0_rect, PassResult* r) {
+  for (const auto& region : e.regions) {
+    const cv::Rect box = region.box & cv::Rect(0, 0, f.gt_unexpected.cols, f.gt_unexpected.rows);
+    if (cv::countNonZero(f.gt_unexpected(box) & e.unexpected(box)) == 0) continue;
+    ++r->visible_detected;
+    if (region.has_centroid && f.gt_T_world_cam0 && !f.gt_movers.empty()) {
+      const Eigen::Vector3d c = *f.gt_T_world_cam0 * T_cam0_rect * region.centroid_cam0;
+      double best = std::numeric_limits<double>::infinity();
+      for (const auto& m : f.gt_movers) best = std::min(best, (c - m).head<2>().norm());
+      r->mover_centroid_error_m.push_back(best);
+    }
+    return;
+  }
 }
 
 // Runs one EP per pose source and full-frame SGBM on the same frames, in one loop (the order
@@ -402,6 +440,10 @@ std::vector<PassResult> RunPasses(const Dataset& d, const Rig& rig,
         const double inter = cv::countNonZero(truth & e.unexpected);
         const double uni = cv::countNonZero(truth | e.unexpected);
         r.iou.push_back(inter / uni);
+        if (e.compared) {
+          r.iou_compared.push_back(inter / uni);
+          ScoreDetection(e, f, rig.T_cam0_rect, &r);
+        }
       } else {
         r.flagged_not_visible.push_back(e.unexpected_share);  // nothing moves on its own
       }
@@ -443,6 +485,13 @@ void Summarise(const PassResult& r, int settle, Json* j) {
   j->Int("visible_frames", static_cast<long long>(r.iou.size()));
   j->Num("iou_median", Median(r.iou));
   j->Num("iou_mean", Mean(r.iou));
+  j->Int("visible_frames_compared", static_cast<long long>(r.iou_compared.size()));
+  j->Num("iou_median_compared", Median(r.iou_compared));
+  j->Int("visible_frames_detected", static_cast<long long>(r.visible_detected));
+  if (!r.mover_centroid_error_m.empty()) {
+    j->Num("mover_centroid_error_m_median", Median(r.mover_centroid_error_m));
+    j->Num("mover_centroid_error_m_max", Max(r.mover_centroid_error_m));
+  }
   j->Int("not_visible_frames", static_cast<long long>(r.flagged_not_visible.size()));
   j->Num("flagged_area_not_visible_mean", Mean(r.flagged_not_visible));
   j->Num("flagged_area_not_visible_median", Median(r.flagged_not_visible));

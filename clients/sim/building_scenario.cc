@@ -3,6 +3,7 @@
 // every metre or 45 degrees of turn to look around by panning (papers 002 and 003). Its wheel
 // odometry drifts: slightly unequal wheel radii and a wheelbase error plus noise bring the
 // heading error to about 20 degrees over the run, as paper 002 reports for its real robot.
+// With --walker a person walks along the first corridor (building_world.h, WalkerPose).
 
 #include <algorithm>
 #include <cmath>
@@ -126,11 +127,19 @@ class BuildingScenario final : public Scenario {
         true_urdf_(options.noise ? TruePanRobotUrdf() : std::string(PanRobotUrdf())),
         nominal_chain_(kinematics::UrdfChain::FromString(PanRobotUrdf())),
         true_chain_(kinematics::UrdfChain::FromString(true_urdf_)) {
+    const int route_frames = static_cast<int>(states_.size());
+    if (options.first_frame >= route_frames) {
+      throw std::invalid_argument("the building route has " + std::to_string(route_frames) +
+                                  " frames; --first-frame " + std::to_string(options.first_frame) +
+                                  " is past its end");
+    }
+    // The run starts part-way along the route: its odometry starts there.
+    states_.erase(states_.begin(), states_.begin() + options.first_frame);
     const int natural = static_cast<int>(states_.size());
     if (options.frames > natural) {
       throw std::invalid_argument("the building route has " + std::to_string(natural) +
-                                  " frames; --frames " + std::to_string(options.frames) +
-                                  " is more");
+                                  " frames from frame " + std::to_string(options.first_frame) +
+                                  "; --frames " + std::to_string(options.frames) + " is more");
     }
     frames_ = options.frames > 0 ? options.frames : natural;
     camera_.width = options.width > 0 ? options.width : kDefaultWidth;
@@ -152,6 +161,7 @@ class BuildingScenario final : public Scenario {
   double rate_hz() const override { return kRateHz; }
   bool rectified() const override { return true; }
   bool has_odometry() const override { return true; }
+  bool has_moving_objects() const override { return options().walker; }
   dataset::CameraSensor cam0() const override { return Sensor(nominal_chain_.Cam0Pose({0.0})); }
   dataset::CameraSensor cam1() const override { return Sensor(nominal_chain_.Cam1Pose({0.0})); }
   std::string urdf() const override { return PanRobotUrdf(); }
@@ -191,6 +201,14 @@ class BuildingScenario final : public Scenario {
 
     StereoShot shot;
     shot.scene = &world_.scene;
+    if (options().walker) {
+      // The walker keeps the route's clock, wherever along it the run starts.
+      const Eigen::Isometry3d T_floor_walker =
+          WalkerPose((index + options().first_frame) / kRateHz);
+      shot.moving = WalkerQuads(world_, T_floor_walker);
+      f.gt_mover_centres = {T_world_floor_ * T_floor_walker *
+                            Eigen::Vector3d(0, 0, kWalkerHeightM / 2)};
+    }
     shot.camera = camera_;
     shot.T_world_cam0 = T_floor_base * true_chain_.Cam0Pose(f.gt_joints);
     shot.T_world_cam1 = T_floor_base * true_chain_.Cam1Pose(f.gt_joints);
@@ -209,9 +227,13 @@ class BuildingScenario final : public Scenario {
   }
 
   std::string Describe() const override {
-    return std::string("building") + (options().reverse ? " (reverse)" : "") + ": " +
-           std::to_string(frames_) + " stereo frames " + std::to_string(camera_.width) + "x" +
-           std::to_string(camera_.height) + " at 10 Hz, seed " + std::to_string(options().seed);
+    return std::string("building") + (options().reverse ? " (reverse)" : "") +
+           (options().walker ? " with a walker" : "") + ": " + std::to_string(frames_) +
+           " stereo frames " +
+           (options().first_frame > 0 ? "from frame " + std::to_string(options().first_frame) + " "
+                                      : std::string()) +
+           std::to_string(camera_.width) + "x" + std::to_string(camera_.height) +
+           " at 10 Hz, seed " + std::to_string(options().seed);
   }
 
  private:

@@ -50,6 +50,16 @@ class Furnisher {
     for (int i = 0; i < 24; ++i) posters_.push_back(b_.AddTexture(tx::Poster(t, 256, 512)));
   }
 
+  // The walker's clothes and skin, drawn from a stream of their own so that the world's other
+  // textures stay what they were.
+  void WalkerClothes(uint64_t seed) {
+    namespace tx = textures;
+    Rng t(seed, Stream::kObjectMotion, 2);
+    world_->walker_trousers = {b_.AddTexture(tx::Fabric(t, 256, {95, 60, 45}, 30.0)), 500};
+    world_->walker_shirt = {b_.AddTexture(tx::Toy(t, 256)), 300};
+    world_->walker_skin = {b_.AddTexture(tx::Paint(t, 256, {150, 175, 215}, 4.0)), 400};
+  }
+
   void FloorAndCeiling() {
     const double W = kBuildingWidthM, D = kBuildingDepthM;
     // Floor seen from above: image up = north.
@@ -333,12 +343,55 @@ BuildingWorld BuildBuilding(uint64_t seed) {
   f.Cabinet(13.07, 18.0, 13.5, 19.2, 1.2);
   f.Plant(15.0, 27.9);
   f.Posters();
+  f.WalkerClothes(seed);
   return world;
 }
 
 std::vector<Eigen::Vector2d> BuildingRoute() {
   return {{3.4, 6.5},   {3.4, 14.25}, {14.25, 14.25}, {14.25, 21.0}, {19.5, 21.0},
           {19.5, 25.5}, {17.0, 25.5}, {17.0, 21.0},   {14.25, 21.0}, {14.25, 6.6}};
+}
+
+Eigen::Isometry3d WalkerPose(double t) {
+  constexpr double kEastX = 12.5, kWestX = 4.5, kY = 15.0, kSpeed = 1.1, kPauseS = 1.5;
+  constexpr double kLegS = (kEastX - kWestX) / kSpeed;
+  constexpr double kCycleS = 2 * (kLegS + kPauseS);
+  const double tau = t - kCycleS * std::floor(t / kCycleS);
+  double x = kEastX, yaw = std::numbers::pi;  // walking west
+  if (tau < kLegS) {
+    x = kEastX - kSpeed * tau;
+  } else if (tau < kLegS + kPauseS) {
+    x = kWestX;
+    yaw = std::numbers::pi * (1 - (tau - kLegS) / kPauseS);  // turning round
+  } else if (tau < 2 * kLegS + kPauseS) {
+    x = kWestX + kSpeed * (tau - kLegS - kPauseS);
+    yaw = 0;
+  } else {
+    yaw = std::numbers::pi * (tau - 2 * kLegS - kPauseS) / kPauseS;
+  }
+  // A sway from foot to foot (two steps a second) while walking.
+  const bool walking = tau < kLegS || (tau >= kLegS + kPauseS && tau < 2 * kLegS + kPauseS);
+  const double sway = walking ? 0.03 * std::sin(2 * std::numbers::pi * t) : 0.0;
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = Eigen::AngleAxisd(yaw, Vector3d::UnitZ()).toRotationMatrix();
+  T.translation() = Vector3d(x, kY, 0) + T.linear() * Vector3d(0, sway, 0);
+  return T;
+}
+
+std::vector<Quad> WalkerQuads(const BuildingWorld& world, const Eigen::Isometry3d& pose) {
+  std::vector<Quad> quads;
+  Rng rng(1, Stream::kObjectMotion, 3);  // the same texture offsets every frame
+  const Lighting lighting;               // the world's (SceneBuilder's default)
+  const auto box = [&](double z0, double z1, double width, double depth, const Material& m) {
+    Eigen::Isometry3d at = pose;
+    at.translate(Vector3d(0, 0, (z0 + z1) / 2));
+    MakeBox(world.scene, lighting, rng, at, Vector3d(depth, width, z1 - z0), SameMaterial(m), 1,
+            &quads);
+  };
+  box(0.0, 0.86, 0.34, 0.22, world.walker_trousers);
+  box(0.86, 1.50, 0.46, 0.26, world.walker_shirt);
+  box(1.51, kWalkerHeightM, 0.19, 0.22, world.walker_skin);
+  return quads;
 }
 
 }  // namespace epmap::sim

@@ -6,17 +6,20 @@
 // doors, painted walls (some plain), skirting boards, door frames, posters, desks, chairs,
 // cabinets, bookshelves and plants.
 
-#include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <cstdint>
 #include <vector>
 
 #include "clients/sim/renderer.h"
+#include "clients/sim/scene_builder.h"
 #include "common/dataset/dataset.h"
 
 namespace epmap::sim {
 
 struct BuildingWorld {
   Scene scene;  // grey
+  // The walker's clothes and skin (see WalkerQuads); in the scene's textures, unused by it.
+  Material walker_trousers, walker_shirt, walker_skin;
   // Footprints (floor frame) of the vertical faces of the walls, door frames included, and of
   // the furniture standing on the floor.
   std::vector<dataset::WallSegment> wall_faces;
@@ -33,5 +36,15 @@ BuildingWorld BuildBuilding(uint64_t seed);
 // second and drives straight between consecutive points, turning in place at each.
 // About 59 m through a room, a door, both corridors and a second room.
 std::vector<Eigen::Vector2d> BuildingRoute();
+
+// A person who walks to and fro along corridor H on their own (scenario building --walker):
+// at 1.1 m/s along y = 15.0 (the corridor's north half; the route keeps to y = 14.25) between
+// x = 4.5 and x = 12.5, pausing 1.5 s at each end; at t = 0 they set off west from x = 12.5.
+// The robot drives this corridor about 25-55 s into the forward run and meets them there.
+// WalkerPose: feet centre on the floor, x = walking direction, z up (floor frame), at time t.
+inline constexpr double kWalkerHeightM = 1.75;
+Eigen::Isometry3d WalkerPose(double t);
+// The walker's body (legs, torso, head: three textured boxes) at `pose`, Quad::object = 1.
+std::vector<Quad> WalkerQuads(const BuildingWorld& world, const Eigen::Isometry3d& pose);
 
 }  // namespace epmap::sim

@@ -110,7 +110,10 @@ class HeadScenario final : public Scenario {
     StereoShot shot;
     shot.scene = &room_.scene;
     if (!vergence_) {
-      if (const auto toy = ToyPose(options().seed, t)) shot.moving = ToyQuads(room_, *toy);
+      if (const auto toy = ToyPose(options().seed, t)) {
+        shot.moving = ToyQuads(room_, *toy);
+        f.gt_mover_centres = {toy->translation()};
+      }
     }
     shot.camera = camera_;
     // The world frame is base_link: the kinematic chain gives the camera poses directly.

@@ -2,8 +2,8 @@
 //   epmap-sim record  --scenario NAME --out DIR [--frames N] [--seed S] [--size WxH] [--force]
 //   epmap-sim publish --scenario NAME --domain N [--rate HZ] [--frames N] [--seed S] [--size WxH]
 //   epmap-sim list
-// Scenario knobs for both: --encoder-noise-scale X, --flicker-scale X, --no-noise, --reverse,
-// --disparity-every-frame.
+// Scenario knobs for both: --encoder-noise-scale X, --flicker-scale X, --no-noise, and for
+// building --reverse, --disparity-every-frame, --walker, --first-frame N.
 // Exit codes: 0 done, 2 bad input (the message says why), 1 failure while running.
 
 #include <CLI/CLI.hpp>
@@ -36,6 +36,8 @@ struct CommonFlags {
   bool no_noise = false;
   bool reverse = false;
   bool disparity_every_frame = false;
+  bool walker = false;
+  int first_frame = 0;
 
   void AddTo(CLI::App* app) {
     std::string names;
@@ -53,6 +55,11 @@ struct CommonFlags {
     app->add_flag("--reverse", reverse, "building: drive the route in the reverse direction");
     app->add_flag("--disparity-every-frame", disparity_every_frame,
                   "building: true disparity for every frame, not only at the stops");
+    app->add_flag("--walker", walker,
+                  "building: a person walks to and fro along the first corridor (true masks "
+                  "and positions recorded)");
+    app->add_option("--first-frame", first_frame,
+                    "building: start at this frame of the route (e.g. 250: entering the corridor)");
   }
 
   epmap::sim::ScenarioOptions Options() const {
@@ -66,6 +73,8 @@ struct CommonFlags {
     o.noise = !no_noise;
     o.reverse = reverse;
     o.disparity_every_frame = disparity_every_frame;
+    o.walker = walker;
+    o.first_frame = first_frame;
     return o;
   }
 };

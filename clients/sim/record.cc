@@ -65,6 +65,7 @@ void Record(const Scenario& scenario, const std::filesystem::path& out, bool for
   for (const auto& n : names) gt_joints.append(",").append(n);
   gt_joints += "\n";
   std::string gt_extrinsics = "#timestamp [ns],p_x [m],p_y [m],p_z [m],q_w,q_x,q_y,q_z\n";
+  std::string gt_movers = "#timestamp [ns],id,x [m],y [m],z [m]\n";
 
   const int total = scenario.frame_count();
   for (int i = 0; i < total; ++i) {
@@ -76,6 +77,12 @@ void Record(const Scenario& scenario, const std::filesystem::path& out, bool for
     if (f.gt_base) w.AddGtBasePose(*f.gt_base);
     if (scenario.RecordsDisparity(f)) w.AddGtDisparity(f.stamp_ns, f.gt_disparity);
     if (scenario.has_moving_objects()) w.AddGtUnexpected(f.stamp_ns, f.gt_unexpected);
+    for (size_t id = 0; id < f.gt_mover_centres.size(); ++id) {
+      const Eigen::Vector3d& c = f.gt_mover_centres[id];
+      gt_movers.append(Stamp(f.stamp_ns)).append(",").append(std::to_string(id + 1));
+      AppendFields(&gt_movers, {c.x(), c.y(), c.z()});
+      gt_movers.append("\n");
+    }
 
     gt_joints.append(Stamp(f.stamp_ns));
     for (double q : f.gt_joints) gt_joints.append(",").append(Csv(q));
@@ -89,6 +96,7 @@ void Record(const Scenario& scenario, const std::filesystem::path& out, bool for
   }
   w.WriteFile("gt_joints0/data.csv", gt_joints);
   w.WriteFile("gt_extrinsics0/data.csv", gt_extrinsics);
+  if (scenario.has_moving_objects()) w.WriteFile("gt_movers0/data.csv", gt_movers);
   if (const auto walls = scenario.Walls(); !walls.empty()) w.WriteWalls(walls);
   if (const auto furniture = scenario.Furniture(); !furniture.empty()) {
     std::string csv = "x1 [m],y1 [m],x2 [m],y2 [m]\n";

@@ -65,6 +65,16 @@ std::unique_ptr<Scenario> MakeScenario(const ScenarioOptions& options) {
         "--disparity-every-frame applies to the building scenario only (the others write it "
         "for every frame)");
   }
+  if (options.walker && name != "building") {
+    throw std::invalid_argument("--walker applies to the building scenario only");
+  }
+  if (options.first_frame != 0 && name != "building") {
+    throw std::invalid_argument("--first-frame applies to the building scenario only");
+  }
+  if (options.first_frame < 0) {
+    throw std::invalid_argument("--first-frame " + std::to_string(options.first_frame) +
+                                " is negative");
+  }
   if (name == "eye-hand" && (options.width > 0 || options.frames > 0)) {
     throw std::invalid_argument(
         "eye-hand has no images: --size and --frames do not apply (20 ellipsoidal paths of 100 "

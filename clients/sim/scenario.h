@@ -40,6 +40,8 @@ struct ScenarioOptions {
   bool reverse = false;                // building: drive the route backwards
   bool disparity_every_frame = false;  // building: true disparity for every frame, not only at
                                        // the look-around stops (to score the EP map driving)
+  bool walker = false;  // building: a person walks to and fro along the first corridor
+  int first_frame = 0;  // building: the run starts at this frame of the whole route
   int64_t start_stamp_ns = kRecordStartStampNs;  // stamp of frame 0
 };
 
@@ -66,6 +68,8 @@ struct SimFrame {
   cv::Mat gt_depth;        // CV_32FC1 z of each left pixel in cam0's frame (m), NaN = unknown
   cv::Mat gt_depth_right;  // CV_32FC1 the same for the right image in cam1's frame
   cv::Mat gt_unexpected;   // CV_8UC1 255 where something moves on its own (left image)
+  // Where each thing that moves on its own is (world frame, its centre), seen or not.
+  std::vector<Eigen::Vector3d> gt_mover_centres;
   Eigen::Isometry3d gt_T_world_cam0 = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d gt_T_world_cam1 = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d gt_T_cam0_cam1 = Eigen::Isometry3d::Identity();  // true stereo extrinsics
@@ -130,8 +134,8 @@ class Scenario {
 std::vector<std::string> ScenarioNames();
 
 // Throws std::invalid_argument with the reason on an unknown name, a size that is not
-// positive (or given for eye-hand), a negative frame count or noise scale, or --reverse for a
-// scenario other than building.
+// positive (or given for eye-hand), a negative frame count or noise scale, or a building-only
+// option (--reverse, --walker, ...) for another scenario.
 std::unique_ptr<Scenario> MakeScenario(const ScenarioOptions& options);
 
 // Parses "WxH" (e.g. "320x240"); throws std::invalid_argument unless both are positive.

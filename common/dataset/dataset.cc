@@ -197,6 +197,18 @@ Dataset LoadSequence(const fs::path& root) {
   if (fs::exists(mav0 / "gt_unexpected0" / "data.csv")) {
     d.gt_unexpected = ReadImageIndex(mav0 / "gt_unexpected0");
   }
+  if (fs::exists(mav0 / "gt_movers0" / "data.csv")) {
+    const fs::path csv = mav0 / "gt_movers0" / "data.csv";
+    for (const auto& row : ReadCsv(csv)) {
+      if (row.size() < 5) Fail(csv, "expected 'timestamp,id,x,y,z' rows");
+      d.gt_movers.push_back({ParseStamp(csv, row[0]), static_cast<int>(ParseDouble(csv, row[1])),
+                             Eigen::Vector3d(ParseDouble(csv, row[2]), ParseDouble(csv, row[3]),
+                                             ParseDouble(csv, row[4]))});
+    }
+    std::stable_sort(
+        d.gt_movers.begin(), d.gt_movers.end(),
+        [](const MoverSample& a, const MoverSample& b) { return a.stamp_ns < b.stamp_ns; });
+  }
   if (fs::exists(mav0 / "gt_map" / "walls.csv")) {
     const fs::path csv = mav0 / "gt_map" / "walls.csv";
     for (const auto& row : ReadCsv(csv)) {

@@ -57,6 +57,13 @@ struct WallSegment {
   double x1 = 0, y1 = 0, x2 = 0, y2 = 0;
 };
 
+// Where a thing that moves on its own is at a frame (gt_movers0: a synthetic-world extension).
+struct MoverSample {
+  int64_t stamp_ns = 0;
+  int id = 0;
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();  // world frame (m)
+};
+
 struct Dataset {
   enum class Kind { kSequence, kStereoPair };
   Kind kind = Kind::kSequence;
@@ -75,6 +82,7 @@ struct Dataset {
   std::vector<PlanarPose> gt_base_pose;
   std::map<int64_t, std::filesystem::path> gt_disparity;
   std::map<int64_t, std::filesystem::path> gt_unexpected;
+  std::vector<MoverSample> gt_movers;  // in time order
   std::vector<WallSegment> walls;
 
   // Stereo-pair folders: scale of the stored ground truth, and the disparity range.

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <numbers>
+#include <opencv2/imgproc.hpp>
 
 #include "clients/sim/record.h"
 #include "clients/sim/scenario.h"
@@ -170,6 +171,62 @@ TEST(BuildingScenario, RecordWritesOdometryMapAndDisparityAtStops) {
   EXPECT_EQ(d.walls.size(), s->Walls().size());
   EXPECT_TRUE(std::filesystem::exists(dir / "b/mav0/gt_map/furniture.csv"));
   EXPECT_EQ(d.joint_names, std::vector<std::string>{"pan"});
+  std::filesystem::remove_all(dir);
+}
+
+// The walker (building_world.h): it changes the images only where the true mask says something
+// moves on its own, its recorded centre lies on it, and the dataset carries both.
+TEST(BuildingScenario, AWalkerMovesOnItsOwnWithItsTrueMaskAndPosition) {
+  ScenarioOptions o = Building();
+  o.first_frame = 300;  // driving along the corridor, the walker ahead in full view
+  o.frames = 4;
+  o.width = 160;
+  o.height = 120;
+  const Scenario* plain = &testing::Shared(o);
+  o.walker = true;
+  const Scenario* walking = &testing::Shared(o);
+  EXPECT_FALSE(plain->has_moving_objects());
+  ASSERT_TRUE(walking->has_moving_objects());
+  const auto cam = walking->cam0();
+  Eigen::Vector3d previous = Eigen::Vector3d::Zero();
+  for (int i = 0; i < o.frames; ++i) {
+    const SimFrame with = walking->Render(i);
+    const SimFrame without = plain->Render(i);
+    EXPECT_TRUE(without.gt_mover_centres.empty());
+    ASSERT_EQ(with.gt_mover_centres.size(), 1u);
+    ASSERT_EQ(with.gt_unexpected.size(), with.left.size());
+    const int seen = cv::countNonZero(with.gt_unexpected);
+    EXPECT_GT(seen, 100) << "frame " << i;
+    // Same world, same noise: the images differ only on the walker (and the blur's 1 px
+    // around it).
+    cv::Mat around;
+    cv::dilate(with.gt_unexpected, around, cv::Mat::ones(5, 5, CV_8U));
+    const cv::Mat changed = with.left != without.left;
+    EXPECT_GT(cv::countNonZero(changed & around), seen / 2) << "frame " << i;
+    EXPECT_EQ(cv::countNonZero(changed & ~around), 0) << "frame " << i;
+    // The centre projects inside the mask's box.
+    const Eigen::Vector3d c = with.gt_T_world_cam0.inverse() * with.gt_mover_centres[0];
+    ASSERT_GT(c.z(), 0.5);
+    const cv::Point2d px(cam.fu * c.x() / c.z() + cam.cu, cam.fv * c.y() / c.z() + cam.cv);
+    EXPECT_TRUE(cv::Rect2d(cv::boundingRect(with.gt_unexpected)).contains(px)) << px;
+    // Walking at 1.1 m/s: 11 cm a frame.
+    if (i > 0) {
+      EXPECT_NEAR((with.gt_mover_centres[0] - previous).norm(), 0.11, 0.03);
+    }
+    previous = with.gt_mover_centres[0];
+  }
+  // The run starts part-way along the route, with its odometry there.
+  EXPECT_EQ(walking->Render(0).odometry->x, 0.0);
+  EXPECT_GT(std::hypot(walking->Render(0).gt_base->x, walking->Render(0).gt_base->y), 5.0);
+
+  const auto dir = epmap::testing::FreshTempDir("sim-walker");
+  Record(*walking, dir / "w", false);
+  const auto d = dataset::Load(dir / "w");
+  EXPECT_EQ(d.gt_unexpected.size(), 4u);
+  ASSERT_EQ(d.gt_movers.size(), 4u);
+  EXPECT_EQ(d.gt_movers[2].stamp_ns, d.frames[2].stamp_ns);
+  EXPECT_EQ(d.gt_movers[2].id, 1);
+  EXPECT_LT((d.gt_movers[2].centre - walking->Render(2).gt_mover_centres[0]).norm(), 1e-6);
   std::filesystem::remove_all(dir);
 }
 

@@ -32,6 +32,23 @@ TEST(ScenarioOptions, BadInputIsRefusedWithTheReason) {
   o.reverse = true;
   EXPECT_NE(ErrorOf(o).find("building scenario only"), std::string::npos);
   o.reverse = false;
+  o.walker = true;
+  EXPECT_NE(ErrorOf(o).find("--walker applies to the building scenario only"), std::string::npos);
+  o.walker = false;
+  o.first_frame = 10;
+  EXPECT_NE(ErrorOf(o).find("--first-frame applies to the building scenario only"),
+            std::string::npos);
+  o.name = "building";
+  o.first_frame = -1;
+  EXPECT_NE(ErrorOf(o).find("negative"), std::string::npos);
+  o.first_frame = 100000;
+  EXPECT_NE(ErrorOf(o).find("past its end"), std::string::npos);
+  o.first_frame = 1800;
+  o.frames = 100;
+  EXPECT_NE(ErrorOf(o).find("from frame 1800"), std::string::npos);
+  o.first_frame = 0;
+  o.frames = 0;
+  o.name = "head";
   o.encoder_noise_scale = -1;
   EXPECT_NE(ErrorOf(o).find(">= 0"), std::string::npos);
   o.encoder_noise_scale = 1;

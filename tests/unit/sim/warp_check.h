@@ -16,9 +16,11 @@ namespace epmap::sim::testing {
 // Scenarios are built once per binary: their textures take a few hundred milliseconds.
 inline const Scenario& Shared(const ScenarioOptions& o) {
   static std::map<std::string, std::unique_ptr<Scenario>> cache;
-  const std::string key = o.name + "/" + std::to_string(o.width) + "x" + std::to_string(o.height) +
-                          "/" + std::to_string(o.frames) + "/" + std::to_string(o.seed) + "/" +
-                          std::to_string(o.noise) + std::to_string(o.reverse);
+  const std::string key =
+      o.name + "/" + std::to_string(o.width) + "x" + std::to_string(o.height) + "/" +
+      std::to_string(o.frames) + "/" + std::to_string(o.seed) + "/" + std::to_string(o.noise) +
+      std::to_string(o.reverse) + std::to_string(o.walker) + "/" + std::to_string(o.first_frame) +
+      "/" + std::to_string(o.encoder_noise_scale) + "/" + std::to_string(o.flicker_scale);
   auto& s = cache[key];
   if (!s) s = MakeScenario(o);
   return *s;
