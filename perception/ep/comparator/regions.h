@@ -17,7 +17,9 @@ struct Region {
   double mean_disparity_px = 0;  // over the region's pixels with a known disparity (NaN if none)
   int disparity_pixels = 0;      // how many pixels had one
   bool has_centroid = false;     // false when no pixel of the region has a disparity
-  Eigen::Vector3d centroid_cam0 = Eigen::Vector3d::Zero();  // mean 3-D point, camera frame (m)
+  // The mean 3-D point of the region's main surface (its points within max(1 px, 15%) of its
+  // median disparity: not the background showing at a moving thing's edges), camera frame (m).
+  Eigen::Vector3d centroid_cam0 = Eigen::Vector3d::Zero();
   Eigen::Vector3d centroid_base = Eigen::Vector3d::Zero();  // the same in the base frame
 };
 

@@ -344,8 +344,8 @@ TEST(EpOnAMobileBase, APersonWalkingPastIsReportedInTheBaseAndOdometryFrames) {
       "median: base frame %.2f m, odometry frame %.2f m\n",
       base_errors.size(), events.size(), median(base_errors), median(odom_errors));
   // The bench on the same frames: detected on 20 of the 21 compared frames with the person in
-  // view, centroid 0.49 m from the centre (median; the region holds the part of the body that
-  // moved, and its edges' background).
+  // view, centroid 0.37 m from the centre (median; the region holds the part of the body that
+  // moved, often its near edge while the person passes beside the robot).
   // The odometry frame's figure must match the base frame's frame by frame: the robot drives
   // about a metre in this window, which a centroid left in the base frame would add.
   std::vector<double> disagreement;

@@ -128,6 +128,25 @@ TEST(Regions, BoxAreaDisparityAndCentroidInBothFrames) {
   EXPECT_TRUE(std::isnan(regions[1].mean_disparity_px));
 }
 
+// A region on a moving thing holds some background at its edges; its centroid is the thing's.
+TEST(Regions, TheCentroidIsThatOfTheMainSurfaceNotOfTheBackgroundAtItsEdges) {
+  stereo::RectifiedGeometry cam{160, 120, 100.0, 100.0, 79.5, 59.5, 0.1};
+  cv::Mat mask(120, 160, CV_8U, cv::Scalar(0));
+  cv::Mat disparity(120, 160, CV_32F, cv::Scalar(std::nan("")));
+  mask(cv::Rect(70, 50, 20, 20)).setTo(255);
+  disparity(cv::Rect(70, 50, 16, 20)).setTo(10.0F);  // the thing, 1 m away (80%)
+  disparity(cv::Rect(86, 50, 4, 20)).setTo(1.0F);    // the wall behind it, 10 m away (20%)
+  disparity.at<float>(50, 70) = 10.5F;               // the thing is not flat
+  const auto regions = ep::LabelRegions(mask, disparity, cam, Eigen::Isometry3d::Identity());
+  ASSERT_EQ(regions.size(), 1u);
+  ASSERT_TRUE(regions[0].has_centroid);
+  // A mean over all points would put it at z = 0.8 * 1 + 0.2 * 10 = 2.8 m.
+  EXPECT_NEAR(regions[0].centroid_cam0.z(), 1.0, 0.01);
+  EXPECT_NEAR(regions[0].centroid_cam0.x(), (77.5 - 79.5) / 100.0, 0.01);  // the thing's middle
+  EXPECT_NEAR(regions[0].mean_disparity_px, 0.8 * 10 + 0.2 * 1, 0.01);     // over all its pixels
+  EXPECT_EQ(regions[0].disparity_pixels, 400);
+}
+
 // Our addition: the predicted disparity checked against the current pair.
 TEST(StereoCheck, FindsWrongDisparitiesOnTexture) {
   const testing::SyntheticScene scene;
