@@ -521,6 +521,7 @@ void Summarise(const PassResult& r, int settle, Json* j) {
       .Int("full_scheduled", static_cast<long long>(r.counters.full_scheduled))
       .Int("full_share", static_cast<long long>(r.counters.full_share))
       .Int("pose_jumps", static_cast<long long>(r.counters.pose_jumps))
+      .Int("from_earlier_view", static_cast<long long>(r.counters.from_earlier_view))
       .Int("non_finite_rejected", static_cast<long long>(r.counters.non_finite_rejected));
   j->Raw("frame_modes", c.str());
 }

@@ -54,6 +54,8 @@ std::vector<std::pair<std::string, Field>> Fields(EpParams* p) {
       {"max_translation_speed_m_s", &p->max_translation_speed_m_s},
       {"min_frame_interval_s", &p->min_frame_interval_s},
       {"max_frame_interval_s", &p->max_frame_interval_s},
+      {"earlier_views", &p->earlier_views},
+      {"earlier_view_max_age_s", &p->earlier_view_max_age_s},
       {"recompute_margin_px", &p->recompute_margin_px},
       {"border_batch_px", &p->border_batch_px},
       {"uncovered_margin_px", &p->uncovered_margin_px},

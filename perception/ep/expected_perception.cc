@@ -182,6 +182,9 @@ void EpParams::Validate() const {
         "EP: the pose jump bounds (max_rotation_rate_rad_s, max_translation_speed_m_s, "
         "min_frame_interval_s) must be > 0 and max_frame_interval_s >= min_frame_interval_s");
   }
+  if (earlier_views < 0 || !(earlier_view_max_age_s >= 0)) {
+    throw std::invalid_argument("EP: earlier_views and earlier_view_max_age_s must be >= 0");
+  }
   if (recompute_margin_px < 0) throw std::invalid_argument("EP: recompute_margin_px must be >= 0");
   if (border_batch_px < 0) throw std::invalid_argument("EP: border_batch_px must be >= 0");
 }
@@ -205,6 +208,38 @@ void ExpectedPerception::Reset() {
   frame_index_ = 0;
   frames_since_full_ = 0;
   refresh_requested_ = false;
+  earlier_views_.clear();
+}
+
+bool ExpectedPerception::ReturnToEarlierView(
+    int64_t stamp_ns, const std::function<bool(const Eigen::Isometry3d&)>& within_bound) {
+  if (params_.earlier_views == 0) return false;
+  const auto too_old = [&](const EarlierView& v) {
+    return static_cast<double>(stamp_ns - v.stamp_ns) * 1e-9 > params_.earlier_view_max_age_s;
+  };
+  while (!earlier_views_.empty() && too_old(earlier_views_.front())) earlier_views_.pop_front();
+  // The map being left: its points may live in the generator's scratch, which the next
+  // prediction overwrites, so they are copied (only at pose jumps).
+  EarlierView leaving{std::move(state_), last_T_base_cam0_, last_stamp_ns_};
+  leaving.state.points = leaving.state.points.clone();
+  state_ = MapState{};
+  // The newest earlier view the camera is back at, if any.
+  for (auto it = earlier_views_.rbegin(); it != earlier_views_.rend(); ++it) {
+    if (!within_bound(it->T_base_cam0)) continue;
+    state_ = std::move(it->state);
+    last_T_base_cam0_ = it->T_base_cam0;
+    earlier_views_.erase(std::next(it).base());
+    earlier_views_.push_back(std::move(leaving));
+    while (static_cast<int>(earlier_views_.size()) > params_.earlier_views) {
+      earlier_views_.pop_front();
+    }
+    return true;
+  }
+  earlier_views_.push_back(std::move(leaving));
+  while (static_cast<int>(earlier_views_.size()) > params_.earlier_views) {
+    earlier_views_.pop_front();
+  }
+  return false;
 }
 
 std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_in,
@@ -251,15 +286,22 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
   cv::Mat flagged;    // the comparator's unexpected regions, at full resolution
   cv::Mat deferred;   // thin border strips left for a later frame
   cv::Mat uncertain;  // recomputed regions whose disparity may be anything
+  bool from_earlier_view = false;
   if (has_state_) {
-    const Eigen::Isometry3d T_cur_prev = T_base_cam0.inverse() * last_T_base_cam0_;
-    const double angle = Eigen::AngleAxisd(T_cur_prev.linear()).angle();
     const double dt_s = std::clamp(static_cast<double>(stamp_ns - last_stamp_ns_) * 1e-9,
                                    params_.min_frame_interval_s, params_.max_frame_interval_s);
-    if (angle > params_.max_rotation_rate_rad_s * dt_s ||
-        T_cur_prev.translation().norm() > params_.max_translation_speed_m_s * dt_s) {
+    const auto within_bound = [&](const Eigen::Isometry3d& T_before) {
+      const Eigen::Isometry3d T_cur_prev = T_base_cam0.inverse() * T_before;
+      return Eigen::AngleAxisd(T_cur_prev.linear()).angle() <=
+                 params_.max_rotation_rate_rad_s * dt_s &&
+             T_cur_prev.translation().norm() <= params_.max_translation_speed_m_s * dt_s;
+    };
+    const bool jump = !within_bound(last_T_base_cam0_);
+    if (jump) from_earlier_view = ReturnToEarlierView(stamp_ns, within_bound);
+    if (jump && !from_earlier_view) {
       mode = FrameMode::kPoseJump;
     } else {
+      const Eigen::Isometry3d T_cur_prev = T_base_cam0.inverse() * last_T_base_cam0_;
       mode = FrameMode::kPredicted;
       auto t0 = Clock::now();
       pred = Predict(state_, T_cur_prev, camera_, params_.prediction, &scratch_);
@@ -540,6 +582,7 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
   res->timings.fuse_ms = MsSince(t0);
 
   res->mode = mode;
+  res->from_earlier_view = from_earlier_view;
   ++counters_.frames;
   switch (mode) {
     case FrameMode::kFirst:
@@ -547,6 +590,7 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
       break;
     case FrameMode::kPredicted:
       ++counters_.predicted;
+      if (from_earlier_view) ++counters_.from_earlier_view;
       break;
     case FrameMode::kRefreshScheduled:
       ++counters_.full_scheduled;

@@ -124,6 +124,7 @@ void Pipeline::RunExpectedPerception(const StereoFrame& frame, const stereo::Rec
   stage_ms_.Add("ep.fuse", t.fuse_ms);
   stage_ms_.Add("ep.total", t.total_ms);
   if (const char* name = EventName(result->mode); *name) events_.Increment(name);
+  if (result->from_earlier_view) events_.Increment("ep_predicted_from_earlier_view");
   if (result->mode != ep::FrameMode::kPredicted) full_refreshes_++;
   if (result->non_finite_rejected > 0) {
     events_.Increment("ep_non_finite_prediction_values", result->non_finite_rejected);

@@ -128,22 +128,78 @@ TEST(ExpectedPerception, AHeadWithoutMovingThingsFindsNothingUnexpected) {
 
 TEST(ExpectedPerception, APoseJumpIsComputedWholeAndCounted) {
   const testing::SyntheticScene scene;
-  ExpectedPerception ep(scene.camera(), Params());
   const Frame f0 = Render(scene, 0, false), f1 = Render(scene, 1, false),
               f2 = Render(scene, 2, false), f3 = Render(scene, 3, false);
-  ep.Process(f0.left, f0.right, f0.T_base_cam0, f0.stamp_ns);
-  // An encoder glitch: 0.4 rad in 1/30 s, and back.
-  const Eigen::Isometry3d glitch = testing::HeadPose(0.4, 0.0);
-  const auto res = ep.Process(f1.left, f1.right, glitch, f1.stamp_ns);
-  EXPECT_EQ(res->mode, FrameMode::kPoseJump);
-  EXPECT_FALSE(res->compared);
-  EXPECT_DOUBLE_EQ(res->recomputed_share, 1.0);
-  EXPECT_EQ(cv::countNonZero(res->unexpected), 0);
-  EXPECT_EQ(ep.Process(f2.left, f2.right, f2.T_base_cam0, f2.stamp_ns)->mode, FrameMode::kPoseJump);
-  EXPECT_EQ(ep.counters().pose_jumps, 2u);
-  const auto next = ep.Process(f3.left, f3.right, f3.T_base_cam0, f3.stamp_ns);
-  EXPECT_EQ(next->mode, FrameMode::kPredicted);
-  EXPECT_LT(next->unexpected_share, 0.005);
+  // An encoder glitch: 0.4 rad in 1/30 s, and back. Without earlier views the way back is a
+  // jump too; with them (the default) the frame after the glitch is predicted from the map
+  // the glitch left.
+  for (const int earlier_views : {0, 4}) {
+    EpParams params = Params();
+    params.earlier_views = earlier_views;
+    ExpectedPerception ep(scene.camera(), params);
+    ep.Process(f0.left, f0.right, f0.T_base_cam0, f0.stamp_ns);
+    const Eigen::Isometry3d glitch = testing::HeadPose(0.4, 0.0);
+    const auto res = ep.Process(f1.left, f1.right, glitch, f1.stamp_ns);
+    EXPECT_EQ(res->mode, FrameMode::kPoseJump);
+    EXPECT_FALSE(res->compared);
+    EXPECT_DOUBLE_EQ(res->recomputed_share, 1.0);
+    EXPECT_EQ(cv::countNonZero(res->unexpected), 0);
+    const auto back = ep.Process(f2.left, f2.right, f2.T_base_cam0, f2.stamp_ns);
+    if (earlier_views == 0) {
+      EXPECT_EQ(back->mode, FrameMode::kPoseJump);
+      EXPECT_EQ(ep.counters().pose_jumps, 2u);
+    } else {
+      EXPECT_EQ(back->mode, FrameMode::kPredicted);
+      EXPECT_TRUE(back->compared);
+      EXPECT_LT(back->unexpected_share, 0.005);
+      EXPECT_EQ(ep.counters().pose_jumps, 1u);
+      EXPECT_EQ(ep.counters().from_earlier_view, 1u);
+    }
+    const auto next = ep.Process(f3.left, f3.right, f3.T_base_cam0, f3.stamp_ns);
+    EXPECT_EQ(next->mode, FrameMode::kPredicted);
+    EXPECT_LT(next->unexpected_share, 0.005);
+  }
+}
+
+TEST(ExpectedPerception, AHeadPanningBackToAnEarlierViewIsPredictedFromIt) {
+  // A look-around in steps beyond the bound (0.5 rad in 0.1 s): 0, -0.5, 0, +0.5, 0 rad. The
+  // returns to 0 are predicted from the map left there, the frames out are computed whole; an
+  // earlier view older than earlier_view_max_age_s is forgotten.
+  const testing::SyntheticScene scene;
+  const double yaws[] = {0.0, -0.5, 0.0, 0.5, 0.0};
+  std::vector<Frame> frames;
+  for (double yaw : yaws) {
+    Frame f;
+    f.T_base_cam0 = testing::HeadPose(yaw, 0.0);
+    scene.Render(f.T_base_cam0, &f.left, &f.right);
+    frames.push_back(f);
+  }
+  ExpectedPerception ep(scene.camera(), Params());
+  std::vector<FrameMode> modes;
+  for (size_t k = 0; k < frames.size(); ++k) {
+    const auto res = ep.Process(frames[k].left, frames[k].right, frames[k].T_base_cam0,
+                                static_cast<int64_t>(k + 1) * 100'000'000);
+    modes.push_back(res->mode);
+    if (res->mode == FrameMode::kPredicted) {
+      EXPECT_TRUE(res->compared);
+      EXPECT_LT(res->unexpected_share, 0.005) << "frame " << k;
+      EXPECT_LT(res->recomputed_share, 0.3) << "frame " << k;
+    }
+  }
+  EXPECT_EQ(modes,
+            (std::vector<FrameMode>{FrameMode::kFirst, FrameMode::kPoseJump, FrameMode::kPredicted,
+                                    FrameMode::kPoseJump, FrameMode::kPredicted}));
+  EXPECT_EQ(ep.counters().from_earlier_view, 2u);
+
+  EpParams short_memory = Params();
+  short_memory.earlier_view_max_age_s = 0.15;  // the view at 0 is 0.2 s old when it returns
+  ExpectedPerception forgetful(scene.camera(), short_memory);
+  for (size_t k = 0; k < 3; ++k) {
+    forgetful.Process(frames[k].left, frames[k].right, frames[k].T_base_cam0,
+                      static_cast<int64_t>(k + 1) * 100'000'000);
+  }
+  EXPECT_EQ(forgetful.counters().from_earlier_view, 0u);
+  EXPECT_EQ(forgetful.counters().pose_jumps, 2u);
 }
 
 TEST(ExpectedPerception, ThePoseJumpBoundIsARateNotAStepPerFrame) {
