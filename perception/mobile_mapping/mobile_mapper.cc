@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <opencv2/imgproc.hpp>
 #include <sstream>
 #include <stdexcept>
 
@@ -23,6 +24,13 @@ std::string Fmt(double v) {
 }
 
 }  // namespace
+
+cv::Mat GrowMovingMask(const cv::Mat& mask) {
+  cv::Mat grown;
+  const int k = 2 * kMovingMaskGrowPx + 1;
+  cv::dilate(mask, grown, cv::getStructuringElement(cv::MORPH_RECT, {k, k}));
+  return grown;
+}
 
 void MobileMapperParams::Validate() const {
   edges.Validate();
@@ -88,6 +96,9 @@ std::optional<Rejection> MobileMapper::Check(const KeyFrame& f) const {
                                        std::to_string(f.right.rows) + ", the camera is " +
                                        std::to_string(image_size_.width) + "x" +
                                        std::to_string(image_size_.height)};
+  }
+  if (!f.moving.empty() && (f.moving.type() != CV_8UC1 || f.moving.size() != image_size_)) {
+    return Rejection{"moving_mask_size", "the moving mask is not CV_8UC1 of the images' size"};
   }
   if (!f.T_odom_base.matrix().allFinite()) {
     return Rejection{"odometry_not_finite", "the odometry pose holds NaN or infinity"};
@@ -165,8 +176,18 @@ KeyFrameReport MobileMapper::AddKeyFrame(const KeyFrame& f) {
     }
   }
   localisation::KeyFrameFeatures features = tracker_.Detect(f.left, f.right, T_base_cam_heading);
+  auto edges = perceptual_map::MatchEdgePoints(f.left, f.right, camera_, params_.edges);
+  if (!f.moving.empty()) {
+    const auto moves = [&](float u, float v) {
+      const int x = static_cast<int>(u + 0.5F), y = static_cast<int>(v + 0.5F);
+      return x >= 0 && y >= 0 && x < f.moving.cols && y < f.moving.rows &&
+             f.moving.at<uint8_t>(y, x) != 0;
+    };
+    std::erase_if(features.features,
+                  [&](const localisation::StereoFeature& s) { return moves(s.left.x, s.left.y); });
+    std::erase_if(edges, [&](const perceptual_map::EdgePoint& e) { return moves(e.u, e.v); });
+  }
   report.features = features.features.size();
-  const auto edges = perceptual_map::MatchEdgePoints(f.left, f.right, camera_, params_.edges);
   report.edge_points = edges.size();
   FramePoints frame;
   frame.camera_in_base = f.T_base_cam.translation();

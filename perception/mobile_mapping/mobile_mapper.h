@@ -45,7 +45,16 @@ struct KeyFrame {
   Eigen::Isometry3d T_base_cam = Eigen::Isometry3d::Identity();
   // Joint readings in the order of MobileMapperParams::joint_limits (may be empty).
   std::vector<double> joint_positions;
+  // Optional, CV_8U of the left image's size: non-zero where something moves on its own (in
+  // epmapd, the EP's unexpected mask of this frame, grown a little). No map point and no heading
+  // feature is taken there: a person walking by is neither a wall nor a landmark to steer by.
+  cv::Mat moving;
 };
+
+// A motion mask (e.g. the EP's unexpected mask) grown by kMovingMaskGrowPx on each side, so
+// that the edge points and corners along a moving thing's outline are left out too.
+inline constexpr int kMovingMaskGrowPx = 3;
+cv::Mat GrowMovingMask(const cv::Mat& mask);
 
 struct MobileMapperParams {
   MobileMapperParams() {

@@ -65,6 +65,12 @@ void Pipeline::RunMaps(const StereoFrame& frame, const stereo::Rectifier& rectif
   key_frame.T_odom_base = Eigen::Translation2d(odom->x, odom->y) * Eigen::Rotation2Dd(odom->theta);
   key_frame.T_base_cam = chain_->Cam0Pose(joints) * RawToRectified(rectifier);
   key_frame.joint_positions = joints;
+  // What the EP found moving on its own in this very frame stays out of the maps, grown by a
+  // few pixels (the mask is on the comparison grid's resolution at its edges).
+  if (snapshot.ep && snapshot.ep->stamp_ns == frame.stamp_ns && snapshot.ep->unexpected_share > 0 &&
+      snapshot.ep->unexpected.size() == left.size()) {
+    key_frame.moving = mobile_mapping::GrowMovingMask(snapshot.ep->unexpected);
+  }
   if (!std::isfinite(odom->x) || !std::isfinite(odom->y) || !std::isfinite(odom->theta)) {
     counters_.key_frames_refused.Increment("maps:odometry_not_finite");
     return;
@@ -108,6 +114,7 @@ void Pipeline::RunMaps(const StereoFrame& frame, const stereo::Rectifier& rectif
   if (report.edge_points == 0) events_.Increment("maps_key_frame_without_edges");
   if (report.view_skipped) events_.Increment("maps_view_without_objects");
   if (report.shifted) events_.Increment("maps_correlation_shifts");
+  if (!key_frame.moving.empty()) events_.Increment("maps_key_frame_motion_masked");
   stage_ms_.Add("maps.key_frame",
                 std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
   // While the robot stands at a stop, readers get the stop merged provisionally: a planner

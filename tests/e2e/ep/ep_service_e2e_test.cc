@@ -303,6 +303,13 @@ TEST(EpOnAMobileBase, APersonWalkingPastIsReportedInTheBaseAndOdometryFrames) {
   watch_context.TryCancel();
   watcher.join();
   EXPECT_EQ(status.frames_rejected(), 0u) << status.DebugString();
+  // The maps of the same service took nothing from where the person was found.
+  const uint64_t masked = testing::Epmapd::Count(status.events(), "maps_key_frame_motion_masked");
+  std::printf("key frames with the person masked out of the maps: %llu of %llu\n",
+              static_cast<unsigned long long>(masked),
+              static_cast<unsigned long long>(
+                  testing::Epmapd::Count(status.events(), "maps_key_frames")));
+  EXPECT_GE(masked, 1u) << status.DebugString();
 
   const auto planar = [](double x, double y, double theta) {
     return Eigen::Translation3d(x, y, 0) * Eigen::AngleAxisd(theta, Eigen::Vector3d::UnitZ());

@@ -200,15 +200,51 @@ TEST_F(MobileMapperTest, RefusesBadKeyFramesAndKeepsTheMapsIntact) {
   none.joint_positions = {0.0};
   none.right = cv::Mat();
   refused(none, "image_missing");
+  KeyFrame mask = pan;
+  mask.joint_positions = {0.0};
+  mask.moving = cv::Mat(120, 160, CV_8UC1, cv::Scalar(0));
+  refused(mask, "moving_mask_size");
 
   const auto after = mapper.Snapshot();
-  EXPECT_EQ(after->counters.rejected, 6u);
+  EXPECT_EQ(after->counters.rejected, 7u);
   EXPECT_EQ(after->counters.rejected_by_reason.at("odometry_jump"), 1u);
   EXPECT_EQ(after->poses.size(), before->poses.size());
   EXPECT_EQ(after->perceptual.segments.size(), before->perceptual.segments.size());
   EXPECT_EQ(after->grid.Export().occupancy, before->grid.Export().occupancy);
   // The run goes on where it was.
   EXPECT_TRUE(mapper.AddKeyFrame((*frames_)[half]).accepted);
+}
+
+// What moves on its own (KeyFrame::moving, in epmapd the EP's unexpected mask) gives the maps
+// no point and the heading no feature.
+TEST_F(MobileMapperTest, NothingIsTakenFromWhereSomethingMovesOnItsOwn) {
+  const KeyFrame& f = (*frames_)[0];
+  const auto measured = [&](const cv::Mat& moving) {
+    MobileMapper mapper(testing::BumblebeeLikeCamera(), Params());
+    KeyFrame k = f;
+    k.moving = moving;
+    return mapper.AddKeyFrame(k);
+  };
+  const auto all = measured(cv::Mat());
+  ASSERT_GT(all.edge_points, 50u);
+  ASSERT_GT(all.features, 20u);
+  cv::Mat left_half(f.left.size(), CV_8UC1, cv::Scalar(0));
+  left_half(cv::Rect(0, 0, f.left.cols / 2, f.left.rows)).setTo(255);
+  const auto half = measured(left_half);
+  EXPECT_TRUE(half.accepted);
+  EXPECT_LT(half.edge_points, all.edge_points * 3 / 4);
+  EXPECT_GT(half.edge_points, 0u);
+  EXPECT_LT(half.features, all.features);
+  const auto everything = measured(cv::Mat(f.left.size(), CV_8UC1, cv::Scalar(255)));
+  EXPECT_TRUE(everything.accepted);
+  EXPECT_EQ(everything.edge_points, 0u);
+  EXPECT_EQ(everything.features, 0u);
+  // The mask is grown so that a moving thing's outline goes too.
+  cv::Mat dot(f.left.size(), CV_8UC1, cv::Scalar(0));
+  dot.at<uint8_t>(60, 80) = 255;
+  EXPECT_EQ(
+      cv::countNonZero(mobile_mapping::GrowMovingMask(dot)),
+      (2 * mobile_mapping::kMovingMaskGrowPx + 1) * (2 * mobile_mapping::kMovingMaskGrowPx + 1));
 }
 
 TEST_F(MobileMapperTest, AStopWithNoEdgesIsCountedNotFatal) {
