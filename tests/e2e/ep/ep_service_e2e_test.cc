@@ -22,6 +22,15 @@ using std::chrono::seconds;
 
 constexpr int kFrames = 90;
 
+// The status once every one of `frames` sent frames was processed, dropped or rejected.
+v1::ServiceStatus WaitUntilAllFramesAreAccountedFor(testing::Epmapd& epmapd, uint64_t frames) {
+  return epmapd.WaitStatus(
+      [frames](const v1::ServiceStatus& s) {
+        return s.frames_processed() + s.queue_dropped() + s.frames_rejected() >= frames;
+      },
+      seconds(60));
+}
+
 class EpServiceE2E : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
@@ -88,11 +97,7 @@ TEST_F(EpServiceE2E, WatchedRegionsFollowTheTrueMovingObject) {
       << ctl_watch.Output();
 
   Replay(domain, work);
-  const auto status = epmapd.WaitStatus(
-      [](const v1::ServiceStatus& s) {
-        return s.frames_processed() + s.queue_dropped() + s.frames_rejected() >= kFrames;
-      },
-      seconds(60));
+  const auto status = WaitUntilAllFramesAreAccountedFor(epmapd, kFrames);
   watch_context.TryCancel();
   watcher.join();
   ASSERT_EQ(ctl_watch.Wait(seconds(30)), 0) << ctl_watch.Output();
@@ -295,20 +300,16 @@ TEST(EpOnAMobileBase, APersonWalkingPastIsReportedInTheBaseAndOdometryFrames) {
       testing::BinDir() / "epmap-replay", {data_dir.string(), "--domain", std::to_string(domain)},
       work / "replay.log", seconds(120));
   ASSERT_EQ(replay_code, 0) << replay_out;
-  const auto status = epmapd.WaitStatus(
-      [](const v1::ServiceStatus& s) {
-        return s.frames_processed() + s.queue_dropped() + s.frames_rejected() >= kWalkerFrames;
-      },
-      seconds(60));
+  const auto status = WaitUntilAllFramesAreAccountedFor(epmapd, kWalkerFrames);
   watch_context.TryCancel();
   watcher.join();
   EXPECT_EQ(status.frames_rejected(), 0u) << status.DebugString();
   // The maps of the same service took nothing from where the person was found.
   const uint64_t masked = testing::Epmapd::Count(status.events(), "maps_key_frame_motion_masked");
-  std::printf("key frames with the person masked out of the maps: %llu of %llu\n",
-              static_cast<unsigned long long>(masked),
-              static_cast<unsigned long long>(
-                  testing::Epmapd::Count(status.events(), "maps_key_frames")));
+  std::printf(
+      "key frames with the person masked out of the maps: %llu of %llu\n",
+      static_cast<unsigned long long>(masked),
+      static_cast<unsigned long long>(testing::Epmapd::Count(status.events(), "maps_key_frames")));
   EXPECT_GE(masked, 1u) << status.DebugString();
 
   const auto planar = [](double x, double y, double theta) {
