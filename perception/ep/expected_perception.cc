@@ -372,8 +372,12 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
             params_.border_batch_px) {
           continue;  // thick enough: recomputed now
         }
+        // Only the thin strip itself waits: a line's run deeper than the batch thickness is
+        // not part of it (it crosses a strip along a perpendicular edge, e.g. the rows of new
+        // content along the top seen from the left edge, which would wait for the rolling band).
+        const int strip_depth = params_.border_batch_px - 1;
         for (size_t i = 0; i < lengths.size(); ++i) {
-          for (int n = 0; n < lengths[i]; ++n) {
+          for (int n = 0; n < std::min(lengths[i], strip_depth); ++n) {
             const int j = side.start + side.step * n;
             const int u = side.rows ? j : static_cast<int>(i);
             const int v = side.rows ? static_cast<int>(i) : j;

@@ -328,6 +328,39 @@ TEST(ExpectedPerception, TheMapDoesNotDrift) {
   EXPECT_LE(late.bad_counting_unknown(), early.bad_counting_unknown() + 0.01);
 }
 
+// The head tilts: a strip of new content appears along the top or the bottom border, thick
+// enough to be worth its SGBM box. It is measured at once, whatever the other borders show (a
+// strip along one border used to be deferred by the rule for the perpendicular borders, whose
+// lines all cross it: it then stayed unknown until the rolling refresh came by).
+TEST(ExpectedPerception, ANewStripAlongTheTopOrBottomIsMeasuredOnceThickEnough) {
+  const testing::SyntheticScene scene;
+  for (const double pitch : {0.04, -0.04}) {
+    ExpectedPerception ep(scene.camera(), Params());
+    const Frame f0 = Render(scene, 0, false);
+    ep.Process(f0.left, f0.right, f0.T_base_cam0, f0.stamp_ns);
+    Frame f1 = f0;
+    f1.T_base_cam0 = testing::HeadPose(0.0, pitch);  // ~10 px of new rows at 1.2 rad/s
+    scene.Render(f1.T_base_cam0, &f1.left, &f1.right, &f1.disparity, &f1.square);
+    f1.stamp_ns += 33'333'333;
+    const auto res = ep.Process(f1.left, f1.right, f1.T_base_cam0, f1.stamp_ns);
+    ASSERT_EQ(res->mode, FrameMode::kPredicted);
+    const cv::Mat holes = res->holes;
+    const cv::Rect top(0, 0, holes.cols, 6), bottom(0, holes.rows - 6, holes.cols, 6);
+    const cv::Rect strip = cv::countNonZero(holes(top)) > cv::countNonZero(holes(bottom)) ? top
+                                                                                          : bottom;
+    const cv::Rect matchable(60, strip.y, holes.cols - 70, strip.height);  // SGBM's margins
+    ASSERT_GT(cv::countNonZero(holes(matchable)), matchable.area() * 9 / 10) << pitch;
+    EXPECT_GT(cv::countNonZero(res->recompute(matchable)), matchable.area() * 9 / 10) << pitch;
+    int known = 0;
+    for (int v = matchable.y; v < matchable.y + matchable.height; ++v) {
+      for (int u = matchable.x; u < matchable.x + matchable.width; ++u) {
+        known += std::isfinite(res->disparity.at<float>(v, u)) ? 1 : 0;
+      }
+    }
+    EXPECT_GT(known, matchable.area() * 8 / 10) << pitch;
+  }
+}
+
 TEST(EpSettings, SetsListsAndRefuses) {
   EpParams p;
   ep::SetEpParam(&p, "comparator.threshold_grey", "21.5");
