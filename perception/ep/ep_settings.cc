@@ -27,6 +27,7 @@ std::vector<std::pair<std::string, Field>> Fields(EpParams* p) {
       {"comparator.min_region_area_px", &p->comparator.min_region_area_px},
       {"comparator.unexpected_weight", &p->comparator.unexpected_weight},
       {"comparator.close_radius_px", &p->comparator.close_radius_px},
+      {"comparator.grow_threshold_grey", &p->comparator.grow_threshold_grey},
       {"stereo_check.enabled", &p->stereo_check.enabled},
       {"stereo_check.threshold_grey", &p->stereo_check.threshold_grey},
       {"stereo_check.window_px", &p->stereo_check.window_px},

@@ -286,6 +286,8 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
   cv::Mat flagged;    // the comparator's unexpected regions, at full resolution
   cv::Mat deferred;   // thin border strips left for a later frame
   cv::Mat uncertain;  // recomputed regions whose disparity may be anything
+  cv::Mat dynamic;    // nonzero where the prediction comes from points that moved on their own
+  bool any_dynamic = false;
   bool from_earlier_view = false;
   if (has_state_) {
     const double dt_s = std::clamp(static_cast<double>(stamp_ns - last_stamp_ns_) * 1e-9,
@@ -307,8 +309,13 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
       pred = Predict(state_, T_cur_prev, camera_, params_.prediction, &scratch_);
       res->timings.predict_ms = MsSince(t0);
       t0 = Clock::now();
+      // Where the prediction comes from points that moved on their own last frame (planned
+      // below too): the comparator keeps following what it found moving.
+      cv::bitwise_and(pred.flags, cv::Scalar(kDynamic), dynamic);
+      any_dynamic = cv::countNonZero(dynamic) > 0;
+      const cv::Mat moved_before = any_dynamic ? Decimate(dynamic, step) : cv::Mat();
       cmp = Compare(pred.image, pred.image_valid, pred.accumulated, Decimate(left, step),
-                    grid_comparator_);
+                    grid_comparator_, moved_before);
       flagged = Upsample(cmp.flagged, size, step);
       if (params_.stereo_check.enabled) {
         res->stereo_inconsistent =
@@ -329,12 +336,7 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
     // prediction came from points that moved on their own last frame (the map's geometry there
     // is not to be trusted whether or not E notices: the thing may have left a low-texture
     // place), grown alike: one dilation of the union.
-    cv::Mat dynamic;
-    bool any_dynamic = false;
-    if (params_.remeasure_dynamic) {
-      cv::bitwise_and(pred.flags, cv::Scalar(kDynamic), dynamic);
-      any_dynamic = cv::countNonZero(dynamic) > 0;
-    }
+    if (!params_.remeasure_dynamic) any_dynamic = false;
     const bool any_flagged = cv::countNonZero(cmp.flagged) > 0;
     if (!any_flagged && !any_dynamic) {  // most frames: no dilation
       uncertain = cv::Mat::zeros(size, CV_8U);

@@ -16,6 +16,9 @@ void ComparatorParams::Validate() const {
   if (!(unexpected_weight >= 0 && unexpected_weight <= 1)) {
     throw std::invalid_argument("comparator: unexpected_weight must be in [0, 1]");
   }
+  if (!(grow_threshold_grey >= 0)) {
+    throw std::invalid_argument("comparator: grow_threshold_grey must be >= 0 (0 = off)");
+  }
   if (open_radius_px < 0 || close_radius_px < 0 || min_region_area_px < 0) {
     throw std::invalid_argument("comparator: radii and minimum area must be >= 0");
   }
@@ -63,6 +66,40 @@ std::pair<double, double> FitGainOffset(const cv::Mat& predicted, const cv::Mat&
     max_residual = std::max(3.0 * std::sqrt(r2 / static_cast<double>(p.size())), 4.0);
   }
   return {gain, offset};
+}
+
+cv::Mat GrowFromSeeds(const cv::Mat& seeds, const cv::Mat& candidates) {
+  CV_Assert(seeds.type() == CV_8UC1 && candidates.type() == CV_8UC1 &&
+            seeds.size() == candidates.size());
+  cv::Mat out = cv::Mat::zeros(seeds.size(), CV_8U);
+  std::vector<cv::Point> stack;
+  for (int v = 0; v < seeds.rows; ++v) {
+    const uint8_t* s = seeds.ptr<uint8_t>(v);
+    uint8_t* o = out.ptr<uint8_t>(v);
+    for (int u = 0; u < seeds.cols; ++u) {
+      if (s[u] && !o[u]) {
+        o[u] = 255;
+        stack.emplace_back(u, v);
+      }
+    }
+  }
+  while (!stack.empty()) {
+    const cv::Point p = stack.back();
+    stack.pop_back();
+    for (int dv = -1; dv <= 1; ++dv) {
+      const int v = p.y + dv;
+      if (v < 0 || v >= out.rows) continue;
+      const uint8_t* c = candidates.ptr<uint8_t>(v);
+      uint8_t* o = out.ptr<uint8_t>(v);
+      for (int du = -1; du <= 1; ++du) {
+        const int u = p.x + du;
+        if (u < 0 || u >= out.cols || o[u] || !c[u]) continue;
+        o[u] = 255;
+        stack.emplace_back(u, v);
+      }
+    }
+  }
+  return out;
 }
 
 cv::Mat RemoveSpecks(const cv::Mat& mask, int open_radius_px, int min_area_px,
@@ -116,7 +153,7 @@ cv::Mat RemoveSpecks(const cv::Mat& mask, int open_radius_px, int min_area_px,
 
 Comparison Compare(const cv::Mat& predicted, const cv::Mat& valid,
                    const cv::Mat& predicted_accumulated, const cv::Mat& actual,
-                   const ComparatorParams& params) {
+                   const ComparatorParams& params, const cv::Mat& moved_before) {
   params.Validate();
   const cv::Size size = actual.size();
   if (actual.type() != CV_8UC1) throw std::invalid_argument("comparator: L must be CV_8UC1");
@@ -124,6 +161,9 @@ Comparison Compare(const cv::Mat& predicted, const cv::Mat& valid,
       predicted_accumulated.type() != CV_32FC1 || predicted_accumulated.size() != size ||
       valid.type() != CV_8UC1 || valid.size() != size) {
     throw std::invalid_argument("comparator: L_-, C_- (CV_32F) and valid (CV_8U) must match L");
+  }
+  if (!moved_before.empty() && (moved_before.type() != CV_8UC1 || moved_before.size() != size)) {
+    throw std::invalid_argument("comparator: moved_before (CV_8U) must match L");
   }
   Comparison out;
   if (params.compensate_exposure) {
@@ -133,6 +173,9 @@ Comparison Compare(const cv::Mat& predicted, const cv::Mat& valid,
   out.attenuated.create(size, CV_32F);
   out.accumulated.create(size, CV_32F);
   cv::Mat above(size, CV_8U);
+  const bool grow = params.grow_threshold_grey > 0;
+  cv::Mat grow_candidates = grow ? cv::Mat(size, CV_8U) : cv::Mat();
+  const float grow_threshold = static_cast<float>(params.grow_threshold_grey);
   // One pass for the rest, rows shared by two threads:
   //   E = |L_- - L| (Sec. IV-A), only where the prediction exists (0 elsewhere);
   //   A = E exp(-alpha (C_-)^2) (Sec. IV-A), with the propagated history C_- (the exponential
@@ -166,6 +209,7 @@ Comparison Compare(const cv::Mat& predicted, const cv::Mat& valid,
       float* a_row = out.attenuated.ptr<float>(v);
       float* c_row = out.accumulated.ptr<float>(v);
       uint8_t* up = above.ptr<uint8_t>(v);
+      uint8_t* gc = grow ? grow_candidates.ptr<uint8_t>(v) : nullptr;
       for (int u = 0; u < size.width; ++u) att[u] = minus_alpha * hist[u] * hist[u];
       cv::exp(attenuation, attenuation);
       float row_error = 0, row_attenuated = 0;
@@ -179,6 +223,8 @@ Comparison Compare(const cv::Mat& predicted, const cv::Mat& valid,
         e_row[u] = e;
         a_row[u] = a;
         up[u] = unexpected ? 255 : 0;
+        // A growth candidate: a large error that its history attenuated below the threshold.
+        if (gc) gc[u] = e > grow_threshold && !unexpected ? 255 : 0;
         const float c =
             unexpected ? e * e_unexpected + hist[u] * c_unexpected : e * e_new + hist[u] * c_new;
         c_row[u] = is_valid ? c : 0.0F;
@@ -197,8 +243,26 @@ Comparison Compare(const cv::Mat& predicted, const cv::Mat& valid,
     sum_attenuated += row_attenuated_sums[v];
     out.valid_pixels += row_valid_counts[v];
   }
-  out.flagged =
-      RemoveSpecks(above, params.open_radius_px, params.min_region_area_px, params.close_radius_px);
+  if (grow) {
+    // Seeds: A above the threshold, cleaned as without growth; then grown through E above the
+    // growth threshold, and closed again.
+    cv::Mat seeds = above;
+    if (!moved_before.empty()) {
+      cv::Mat still_moving;
+      cv::bitwise_and(moved_before, grow_candidates, still_moving);
+      seeds = above | still_moving;
+    }
+    // Only what would be flagged without growth seeds it (a speck grown through the edges
+    // around it would be a false region).
+    seeds = RemoveSpecks(seeds, params.open_radius_px, params.min_region_area_px,
+                         params.close_radius_px);
+    out.flagged = cv::countNonZero(seeds) == 0 ? seeds
+                                               : RemoveSpecks(GrowFromSeeds(seeds, grow_candidates),
+                                                              0, 0, params.close_radius_px);
+  } else {
+    out.flagged = RemoveSpecks(above, params.open_radius_px, params.min_region_area_px,
+                               params.close_radius_px);
+  }
   if (out.valid_pixels > 0) {
     out.mean_error = sum_error / out.valid_pixels;
     out.mean_attenuated = sum_attenuated / out.valid_pixels;

@@ -64,10 +64,67 @@ TEST(VisualComparator, AttenuatesWhereErrorsAreHabitualAndKeepsNewOnesSalient) {
   EXPECT_LT(cv::countNonZero(out.flagged(cv::Rect(0, 0, 40, 120))), 10);
   EXPECT_GT(cv::countNonZero(out.flagged(cv::Rect(100, 40, 20, 20))), 350);
   EXPECT_LT(out.mean_attenuated, out.mean_error);
-  // Our default: pixels found unexpected keep their history, so a lingering object does not
-  // attenuate itself.
-  EXPECT_FLOAT_EQ(out.accumulated.at<float>(50, 110), 0.0F);
+  // The unexpected pixels feed C at half the weight of the others (w = 0.5, the default).
+  EXPECT_NEAR(out.accumulated.at<float>(50, 110), out.error.at<float>(50, 110) * 0.5F / 10.5F,
+              1e-4);
   EXPECT_GT(out.accumulated.at<float>(50, 60), -1.0F);
+}
+
+// A thing that moved a little: its new edge has no history, the rest overlaps where it was and
+// has accumulated its own error (C_- high). A above the threshold finds only the edge; the
+// growth through E recovers the whole thing, and nothing of the static scene.
+TEST(VisualComparator, AFoundThingIsGrownOverItsPartsThatAttenuateThemselves) {
+  cv::Mat predicted, actual;
+  Images(&predicted, &actual);
+  cv::Mat c_pred(actual.size(), CV_32F, cv::Scalar(0));
+  cv::Mat changed = actual.clone();
+  changed(cv::Rect(60, 40, 40, 30)) += 60;       // the thing, now
+  c_pred(cv::Rect(60, 40, 34, 30)).setTo(8.0F);  // where it was: all but its 6-px leading edge
+  const cv::Mat valid(actual.size(), CV_8U, cv::Scalar(255));
+  ComparatorParams p;
+  p.grow_threshold_grey = 0;
+  const auto edge_only = ep::Compare(predicted, valid, c_pred, changed, p);
+  EXPECT_LT(cv::countNonZero(edge_only.flagged), 400);
+  p.grow_threshold_grey = 12;
+  const auto grown = ep::Compare(predicted, valid, c_pred, changed, p);
+  EXPECT_GE(cv::countNonZero(grown.flagged(cv::Rect(60, 40, 40, 30))), 40 * 30 - 20);
+  EXPECT_LE(cv::countNonZero(grown.flagged), 40 * 30 + 20);
+  // The attenuation itself is untouched: A is the paper's.
+  EXPECT_LT(grown.attenuated.at<float>(55, 70), 1.0F);
+}
+
+// A thing leaving the image has no new part: all of it overlaps where it was, and A is
+// attenuated everywhere. Where it was found moving last frame (moved_before) and its error is
+// still large, it stays found; without that nothing is.
+TEST(VisualComparator, AThingFoundMovingStaysFoundWhileAllOfItOverlapsItself) {
+  cv::Mat predicted, actual;
+  Images(&predicted, &actual);
+  cv::Mat changed = actual.clone();
+  changed(cv::Rect(120, 40, 40, 30)) += 60;
+  cv::Mat c_pred(actual.size(), CV_32F, cv::Scalar(0));
+  c_pred(cv::Rect(120, 40, 40, 30)).setTo(8.0F);
+  cv::Mat moved_before(actual.size(), CV_8U, cv::Scalar(0));
+  moved_before(cv::Rect(116, 40, 44, 30)).setTo(2);
+  moved_before(cv::Rect(10, 10, 20, 20)).setTo(2);  // moved, but nothing differs there now
+  const cv::Mat valid(actual.size(), CV_8U, cv::Scalar(255));
+  const ComparatorParams p;
+  EXPECT_EQ(cv::countNonZero(ep::Compare(predicted, valid, c_pred, changed, p).flagged), 0);
+  const auto followed = ep::Compare(predicted, valid, c_pred, changed, p, moved_before);
+  EXPECT_GE(cv::countNonZero(followed.flagged(cv::Rect(120, 40, 40, 30))), 40 * 30 - 20);
+  EXPECT_EQ(cv::countNonZero(followed.flagged(cv::Rect(0, 0, 60, 60))), 0);
+  EXPECT_THROW(ep::Compare(predicted, valid, c_pred, changed, p, cv::Mat(3, 3, CV_8U)),
+               std::invalid_argument);
+}
+
+TEST(VisualComparator, GrowFromSeedsFollowsEightConnectedCandidatesOnly) {
+  cv::Mat seeds(10, 10, CV_8U, cv::Scalar(0)), candidates(10, 10, CV_8U, cv::Scalar(0));
+  seeds.at<uint8_t>(1, 1) = 255;
+  for (int i = 2; i < 6; ++i) candidates.at<uint8_t>(i, i) = 1;  // a diagonal from the seed
+  candidates.at<uint8_t>(8, 8) = 1;                              // not connected
+  const cv::Mat grown = ep::GrowFromSeeds(seeds, candidates);
+  EXPECT_EQ(cv::countNonZero(grown), 5);
+  EXPECT_EQ(grown.at<uint8_t>(5, 5), 255);
+  EXPECT_EQ(grown.at<uint8_t>(8, 8), 0);
 }
 
 TEST(VisualComparator, ExposureChangeIsNotUnexpected) {

@@ -346,8 +346,8 @@ TEST(ExpectedPerception, ANewStripAlongTheTopOrBottomIsMeasuredOnceThickEnough) 
     ASSERT_EQ(res->mode, FrameMode::kPredicted);
     const cv::Mat holes = res->holes;
     const cv::Rect top(0, 0, holes.cols, 6), bottom(0, holes.rows - 6, holes.cols, 6);
-    const cv::Rect strip = cv::countNonZero(holes(top)) > cv::countNonZero(holes(bottom)) ? top
-                                                                                          : bottom;
+    const cv::Rect strip =
+        cv::countNonZero(holes(top)) > cv::countNonZero(holes(bottom)) ? top : bottom;
     const cv::Rect matchable(60, strip.y, holes.cols - 70, strip.height);  // SGBM's margins
     ASSERT_GT(cv::countNonZero(holes(matchable)), matchable.area() * 9 / 10) << pitch;
     EXPECT_GT(cv::countNonZero(res->recompute(matchable)), matchable.area() * 9 / 10) << pitch;
