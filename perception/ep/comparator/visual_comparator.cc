@@ -173,9 +173,6 @@ Comparison Compare(const cv::Mat& predicted, const cv::Mat& valid,
   out.attenuated.create(size, CV_32F);
   out.accumulated.create(size, CV_32F);
   cv::Mat above(size, CV_8U);
-  const bool grow = params.grow_threshold_grey > 0;
-  cv::Mat grow_candidates = grow ? cv::Mat(size, CV_8U) : cv::Mat();
-  const float grow_threshold = static_cast<float>(params.grow_threshold_grey);
   // One pass for the rest, rows shared by two threads:
   //   E = |L_- - L| (Sec. IV-A), only where the prediction exists (0 elsewhere);
   //   A = E exp(-alpha (C_-)^2) (Sec. IV-A), with the propagated history C_- (the exponential
@@ -209,7 +206,6 @@ Comparison Compare(const cv::Mat& predicted, const cv::Mat& valid,
       float* a_row = out.attenuated.ptr<float>(v);
       float* c_row = out.accumulated.ptr<float>(v);
       uint8_t* up = above.ptr<uint8_t>(v);
-      uint8_t* gc = grow ? grow_candidates.ptr<uint8_t>(v) : nullptr;
       for (int u = 0; u < size.width; ++u) att[u] = minus_alpha * hist[u] * hist[u];
       cv::exp(attenuation, attenuation);
       float row_error = 0, row_attenuated = 0;
@@ -223,8 +219,6 @@ Comparison Compare(const cv::Mat& predicted, const cv::Mat& valid,
         e_row[u] = e;
         a_row[u] = a;
         up[u] = unexpected ? 255 : 0;
-        // A growth candidate: a large error that its history attenuated below the threshold.
-        if (gc) gc[u] = e > grow_threshold && !unexpected ? 255 : 0;
         const float c =
             unexpected ? e * e_unexpected + hist[u] * c_unexpected : e * e_new + hist[u] * c_new;
         c_row[u] = is_valid ? c : 0.0F;
@@ -243,25 +237,30 @@ Comparison Compare(const cv::Mat& predicted, const cv::Mat& valid,
     sum_attenuated += row_attenuated_sums[v];
     out.valid_pixels += row_valid_counts[v];
   }
-  if (grow) {
-    // Seeds: A above the threshold, cleaned as without growth; then grown through E above the
-    // growth threshold, and closed again.
-    cv::Mat seeds = above;
-    if (!moved_before.empty()) {
-      cv::Mat still_moving;
-      cv::bitwise_and(moved_before, grow_candidates, still_moving);
-      seeds = above | still_moving;
-    }
-    // Only what would be flagged without growth seeds it (a speck grown through the edges
-    // around it would be a false region).
-    seeds = RemoveSpecks(seeds, params.open_radius_px, params.min_region_area_px,
-                         params.close_radius_px);
-    out.flagged = cv::countNonZero(seeds) == 0 ? seeds
-                                               : RemoveSpecks(GrowFromSeeds(seeds, grow_candidates),
-                                                              0, 0, params.close_radius_px);
-  } else {
-    out.flagged = RemoveSpecks(above, params.open_radius_px, params.min_region_area_px,
-                               params.close_radius_px);
+  // Growth (see grow_threshold_grey). Candidates: a large error that its history attenuated
+  // to the threshold or below. Seeds: what is flagged without growth, and the candidates that
+  // moved on their own last frame, cleaned alike; grown through the candidates, closed again.
+  const bool grow = params.grow_threshold_grey > 0;
+  cv::Mat candidates;
+  const auto find_candidates = [&] {
+    cv::Mat attenuated_below;
+    cv::compare(out.error, params.grow_threshold_grey, candidates, cv::CMP_GT);
+    cv::compare(out.attenuated, params.threshold_grey, attenuated_below, cv::CMP_LE);
+    candidates &= attenuated_below;
+  };
+  cv::Mat seeds = above;
+  if (grow && !moved_before.empty() && cv::countNonZero(moved_before) > 0) {
+    find_candidates();
+    cv::Mat still_moving;
+    cv::bitwise_and(moved_before, candidates, still_moving);
+    seeds |= still_moving;
+  }
+  out.flagged =
+      RemoveSpecks(seeds, params.open_radius_px, params.min_region_area_px, params.close_radius_px);
+  if (grow && cv::countNonZero(out.flagged) > 0) {  // most frames: nothing to grow
+    if (candidates.empty()) find_candidates();
+    out.flagged =
+        RemoveSpecks(GrowFromSeeds(out.flagged, candidates), 0, 0, params.close_radius_px);
   }
   if (out.valid_pixels > 0) {
     out.mean_error = sum_error / out.valid_pixels;
