@@ -310,12 +310,15 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
       res->timings.predict_ms = MsSince(t0);
       t0 = Clock::now();
       // Where the prediction comes from points that moved on their own last frame (planned
-      // below too): the comparator keeps following what it found moving.
+      // below too): the comparator keeps following what it found moving; and where it comes
+      // from a guessed depth: never grown over.
       cv::bitwise_and(pred.flags, cv::Scalar(kDynamic), dynamic);
       any_dynamic = cv::countNonZero(dynamic) > 0;
-      const cv::Mat moved_before = any_dynamic ? Decimate(dynamic, step) : cv::Mat();
+      PredictionHints hints;
+      if (any_dynamic) hints.moved_before = Decimate(dynamic, step);
+      cv::bitwise_and(Decimate(pred.flags, step), cv::Scalar(kUnseen), hints.guessed);
       cmp = Compare(pred.image, pred.image_valid, pred.accumulated, Decimate(left, step),
-                    grid_comparator_, moved_before);
+                    grid_comparator_, hints);
       flagged = Upsample(cmp.flagged, size, step);
       if (params_.stereo_check.enabled) {
         res->stereo_inconsistent =

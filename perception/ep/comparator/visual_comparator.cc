@@ -153,7 +153,7 @@ cv::Mat RemoveSpecks(const cv::Mat& mask, int open_radius_px, int min_area_px,
 
 Comparison Compare(const cv::Mat& predicted, const cv::Mat& valid,
                    const cv::Mat& predicted_accumulated, const cv::Mat& actual,
-                   const ComparatorParams& params, const cv::Mat& moved_before) {
+                   const ComparatorParams& params, const PredictionHints& hints) {
   params.Validate();
   const cv::Size size = actual.size();
   if (actual.type() != CV_8UC1) throw std::invalid_argument("comparator: L must be CV_8UC1");
@@ -162,9 +162,12 @@ Comparison Compare(const cv::Mat& predicted, const cv::Mat& valid,
       valid.type() != CV_8UC1 || valid.size() != size) {
     throw std::invalid_argument("comparator: L_-, C_- (CV_32F) and valid (CV_8U) must match L");
   }
-  if (!moved_before.empty() && (moved_before.type() != CV_8UC1 || moved_before.size() != size)) {
-    throw std::invalid_argument("comparator: moved_before (CV_8U) must match L");
+  for (const cv::Mat* hint : {&hints.moved_before, &hints.guessed}) {
+    if (!hint->empty() && (hint->type() != CV_8UC1 || hint->size() != size)) {
+      throw std::invalid_argument("comparator: the prediction hints (CV_8U) must match L");
+    }
   }
+  const cv::Mat& moved_before = hints.moved_before;
   Comparison out;
   if (params.compensate_exposure) {
     std::tie(out.gain, out.offset) = FitGainOffset(predicted, valid, actual);
@@ -238,8 +241,9 @@ Comparison Compare(const cv::Mat& predicted, const cv::Mat& valid,
     out.valid_pixels += row_valid_counts[v];
   }
   // Growth (see grow_threshold_grey). Candidates: a large error that its history attenuated
-  // to the threshold or below. Seeds: what is flagged without growth, and the candidates that
-  // moved on their own last frame, cleaned alike; grown through the candidates, closed again.
+  // to the threshold or below, where the depth is not a guess. Seeds: what is flagged without
+  // growth, and the candidates that moved on their own last frame, cleaned alike; grown through the
+  // candidates, closed again.
   const bool grow = params.grow_threshold_grey > 0;
   cv::Mat candidates;
   const auto find_candidates = [&] {
@@ -247,6 +251,7 @@ Comparison Compare(const cv::Mat& predicted, const cv::Mat& valid,
     cv::compare(out.error, params.grow_threshold_grey, candidates, cv::CMP_GT);
     cv::compare(out.attenuated, params.threshold_grey, attenuated_below, cv::CMP_LE);
     candidates &= attenuated_below;
+    if (!hints.guessed.empty()) candidates.setTo(0, hints.guessed);
   };
   cv::Mat seeds = above;
   if (grow && !moved_before.empty() && cv::countNonZero(moved_before) > 0) {

@@ -91,6 +91,12 @@ TEST(VisualComparator, AFoundThingIsGrownOverItsPartsThatAttenuateThemselves) {
   EXPECT_LE(cv::countNonZero(grown.flagged), 40 * 30 + 20);
   // The attenuation itself is untouched: A is the paper's.
   EXPECT_LT(grown.attenuated.at<float>(55, 70), 1.0F);
+  // Where the depth was a guess, nothing is grown over: the region stops there.
+  cv::Mat guessed(actual.size(), CV_8U, cv::Scalar(0));
+  guessed(cv::Rect(60, 40, 20, 30)).setTo(255);
+  const auto stopped = ep::Compare(predicted, valid, c_pred, changed, p, {{}, guessed});
+  EXPECT_LE(cv::countNonZero(stopped.flagged(cv::Rect(60, 40, 20, 30))), 60);
+  EXPECT_GE(cv::countNonZero(stopped.flagged(cv::Rect(80, 40, 20, 30))), 20 * 30 - 20);
 }
 
 // A thing leaving the image has no new part: all of it overlaps where it was, and A is
@@ -109,10 +115,12 @@ TEST(VisualComparator, AThingFoundMovingStaysFoundWhileAllOfItOverlapsItself) {
   const cv::Mat valid(actual.size(), CV_8U, cv::Scalar(255));
   const ComparatorParams p;
   EXPECT_EQ(cv::countNonZero(ep::Compare(predicted, valid, c_pred, changed, p).flagged), 0);
-  const auto followed = ep::Compare(predicted, valid, c_pred, changed, p, moved_before);
+  const auto followed = ep::Compare(predicted, valid, c_pred, changed, p, {moved_before, {}});
   EXPECT_GE(cv::countNonZero(followed.flagged(cv::Rect(120, 40, 40, 30))), 40 * 30 - 20);
   EXPECT_EQ(cv::countNonZero(followed.flagged(cv::Rect(0, 0, 60, 60))), 0);
-  EXPECT_THROW(ep::Compare(predicted, valid, c_pred, changed, p, cv::Mat(3, 3, CV_8U)),
+  EXPECT_THROW(ep::Compare(predicted, valid, c_pred, changed, p, {cv::Mat(3, 3, CV_8U), {}}),
+               std::invalid_argument);
+  EXPECT_THROW(ep::Compare(predicted, valid, c_pred, changed, p, {{}, cv::Mat(3, 3, CV_8U)}),
                std::invalid_argument);
 }
 
