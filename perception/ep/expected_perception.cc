@@ -314,9 +314,10 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
       // from a guessed depth: never grown over.
       cv::bitwise_and(pred.flags, cv::Scalar(kDynamic), dynamic);
       any_dynamic = cv::countNonZero(dynamic) > 0;
+      const cv::Mat grid_flags = Decimate(pred.flags, step);
       PredictionHints hints;
-      if (any_dynamic) hints.moved_before = Decimate(dynamic, step);
-      cv::bitwise_and(Decimate(pred.flags, step), cv::Scalar(kUnseen), hints.guessed);
+      if (any_dynamic) cv::bitwise_and(grid_flags, cv::Scalar(kDynamic), hints.moved_before);
+      cv::bitwise_and(grid_flags, cv::Scalar(kUnseen), hints.guessed);
       cmp = Compare(pred.image, pred.image_valid, pred.accumulated, Decimate(left, step),
                     grid_comparator_, hints);
       flagged = Upsample(cmp.flagged, size, step);
