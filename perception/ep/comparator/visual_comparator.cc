@@ -253,15 +253,14 @@ Comparison Compare(const cv::Mat& predicted, const cv::Mat& valid,
     candidates &= attenuated_below;
     if (!hints.guessed.empty()) candidates.setTo(0, hints.guessed);
   };
-  cv::Mat seeds = above;
   if (grow && !moved_before.empty() && cv::countNonZero(moved_before) > 0) {
     find_candidates();
     cv::Mat still_moving;
     cv::bitwise_and(moved_before, candidates, still_moving);
-    seeds |= still_moving;
+    above |= still_moving;  // what moved last frame and is still a candidate seeds too
   }
   out.flagged =
-      RemoveSpecks(seeds, params.open_radius_px, params.min_region_area_px, params.close_radius_px);
+      RemoveSpecks(above, params.open_radius_px, params.min_region_area_px, params.close_radius_px);
   if (grow && cv::countNonZero(out.flagged) > 0) {  // most frames: nothing to grow
     if (candidates.empty()) find_candidates();
     out.flagged =

@@ -16,7 +16,8 @@
 //     pixel whose history holds ~3 grey levels of error by exp(-0.9) ~ 0.4 and one with ~7 by
 //     exp(-4.9) ~ 0.007 (on a 0..1 scale alpha = 0.1 would do nothing at all).
 //   - the threshold on A is not given in the paper: threshold_grey below (chosen by measurement).
-// Our additions (off by default where they change the paper's equations):
+// Where we depart from the paper's equations by default: pixels found unexpected feed C at half
+// weight (unexpected_weight; the paper's is 1). Our additions:
 //   - exposure compensation: L_- is mapped by a robust global gain/offset fit to L before E is
 //     taken, so that a global illumination change (flicker, auto-exposure) is not "unexpected";
 //   - speck removal (opening, closing, minimum area) on the thresholded A;
