@@ -62,6 +62,8 @@ std::vector<std::pair<std::string, Field>> Fields(EpParams* p) {
       {"uncovered_margin_px", &p->uncovered_margin_px},
       {"history_reset_px", &p->history_reset_px},
       {"remeasure_dynamic", &p->remeasure_dynamic},
+      {"retry_unmatched_frames", &p->retry_unmatched_frames},
+      {"retry_every_frames", &p->retry_every_frames},
       {"narrow_search", &p->narrow_search},
       {"roi.range_margin_px", &p->roi.range_margin_px},
       {"roi.range_margin_share", &p->roi.range_margin_share},

@@ -187,6 +187,10 @@ void EpParams::Validate() const {
   }
   if (recompute_margin_px < 0) throw std::invalid_argument("EP: recompute_margin_px must be >= 0");
   if (border_batch_px < 0) throw std::invalid_argument("EP: border_batch_px must be >= 0");
+  if (retry_unmatched_frames < 0 || retry_unmatched_frames > (kRetryMask >> kRetryShift)) {
+    throw std::invalid_argument("EP: retry_unmatched_frames must be in 0..15");
+  }
+  if (retry_every_frames < 1) throw std::invalid_argument("EP: retry_every_frames must be >= 1");
 }
 
 ExpectedPerception::ExpectedPerception(const stereo::RectifiedGeometry& camera,
@@ -360,6 +364,17 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
       }
     }
     if (!res->stereo_inconsistent.empty()) uncertain |= res->stereo_inconsistent;
+    // Fills SGBM left unmatched when the geometry was in question: still in question, on the
+    // frames that are a retry's turn.
+    if (params_.retry_unmatched_frames > 0 &&
+        frame_index_ % static_cast<uint64_t>(params_.retry_every_frames) == 0) {
+      cv::Mat retry;
+      cv::bitwise_and(pred.flags, cv::Scalar(kRetryMask), retry);
+      if (cv::countNonZero(retry) > 0) {
+        cv::compare(retry, 0, retry, cv::CMP_GT);
+        uncertain |= retry;
+      }
+    }
     cv::bitwise_or(uncertain, pred.holes, recompute);
     // New content along the borders is recomputed once the strip it forms is thick enough to
     // be worth its SGBM box (the box's padding would dwarf a strip of a pixel or two); until
@@ -533,6 +548,7 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
       const uint8_t* carried = predicted ? pred.flags.ptr<uint8_t>(v) : nullptr;
       const uint8_t* hole = predicted ? pred.holes.ptr<uint8_t>(v) : nullptr;
       const uint8_t* later = deferred.empty() ? nullptr : deferred.ptr<uint8_t>(v);
+      const uint8_t* in_question = uncertain.empty() ? nullptr : uncertain.ptr<uint8_t>(v);
       uint8_t* flags = state_.flags.ptr<uint8_t>(v);
       const float ray_y = static_cast<float>((v - camera_.cy) / camera_.fy);
       for (int u = 0; u < size.width; ++u) {
@@ -542,6 +558,16 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
         if (std::isnan(fresh[u]) && (u < first_column || u > last_column || (later && later[u]) ||
                                      (carried && (carried[u] & kUnseen) && !rec[u]))) {
           f |= kUnseen;
+        }
+        // Unmatched where the geometry was in question: tried again, on one frame in
+        // retry_every_frames, at most retry_unmatched_frames times; the count waits on the
+        // frames between, and ends with a match or any other re-measurement.
+        const int retries = carried ? (carried[u] & kRetryMask) >> kRetryShift : 0;
+        if (carried && in_question && in_question[u] && rec[u] && std::isnan(fresh[u])) {
+          f |= static_cast<uint8_t>((retries > 0 ? retries - 1 : params_.retry_unmatched_frames)
+                                    << kRetryShift);
+        } else if (retries > 0 && !rec[u]) {
+          f |= static_cast<uint8_t>(retries << kRetryShift);  // not this frame's turn: kept
         }
         flags[u] = f;
         float d;
