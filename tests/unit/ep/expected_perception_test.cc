@@ -380,8 +380,7 @@ TEST(ExpectedPerception, UnmatchedPixelsWhereSomethingMovedAreTriedAgain) {
   const cv::Mat right0 = plane(cv::Rect(0, 0, W, H)).clone();
   cv::Mat left1 = left0.clone(), right_blank = right0.clone(), right_seen = right0.clone();
   texture.copyTo(left1(thing));
-  right_blank(cv::Rect(thing.x - d_thing, thing.y, thing.width + d_thing, thing.height))
-      .setTo(128);
+  right_blank(cv::Rect(thing.x - d_thing, thing.y, thing.width + d_thing, thing.height)).setTo(128);
   texture.copyTo(right_seen(thing - cv::Point(d_thing, 0)));
   const stereo::RectifiedGeometry camera{W, H, 300.0, 300.0, 159.5, 119.5, 0.1};
   const auto known_share = [&](const cv::Mat& disparity) {
@@ -404,8 +403,7 @@ TEST(ExpectedPerception, UnmatchedPixelsWhereSomethingMovedAreTriedAgain) {
     ep.Process(left0, right0, still, stamp);
     std::shared_ptr<const ep::EpResult> res;
     for (int k = 1; k <= 8; ++k) {
-      res = ep.Process(left1, k <= 3 ? right_blank : right_seen, still,
-                       stamp += 33'333'333);
+      res = ep.Process(left1, k <= 3 ? right_blank : right_seen, still, stamp += 33'333'333);
       ASSERT_EQ(res->mode, FrameMode::kPredicted);
       if (k == 1) {
         ASSERT_GT(cv::countNonZero(res->unexpected(thing)), thing.area() * 2 / 3);
