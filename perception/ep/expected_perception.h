@@ -117,8 +117,8 @@ struct EpParams {
   // <= 0 disables. Our addition, not in the paper.
   double history_reset_px = 1.0;
   // Where SGBM, recomputing a region whose geometry was in question, finds no match (the map
-  // keeps a fill there, unknown), it tries again on each of the next retry_unmatched_frames
-  // frames until it finds one: background a moving thing just uncovered in the left image is
+  // keeps a fill there, unknown), it tries again, up to retry_unmatched_frames times, until it
+  // finds one: background a moving thing just uncovered in the left image is
   // still hidden from the right one for as many frames as the thing takes to move by the
   // difference of their disparities, and without a retry the fill stays (E does not notice a
   // wrong fill on a plain wall) until the rolling refresh comes by. 0..15; 0 disables. Our

@@ -38,7 +38,7 @@ enum PointFlags : uint8_t {
   kMeasured = 1,  // the point is a stereo measurement (else a fill for an SGBM failure)
   kDynamic = 2,   // the point belonged to something found moving on its own
   kUnseen = 4,    // a fill for content SGBM has never seen (it lay in SGBM's blind margins)
-  // Bits 3-6: how many more frames SGBM is to try again at a fill it was asked for where the
+  // Bits 3-6: how many more times SGBM is to try again at a fill it was asked for where the
   // geometry was in question (what a moving thing uncovers is hidden from the right camera for
   // a few frames: occluded, unmatched). 0 = none. Carried with the point; the generator's own
   // fills (cracks, small holes) do not inherit it.
