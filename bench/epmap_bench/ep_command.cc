@@ -313,6 +313,7 @@ struct PassResult {
   std::vector<double> iou_compared, mover_centroid_error_m;
   size_t visible_detected = 0;
   std::vector<double> predict_ms, compare_ms, plan_ms, stereo_ms, fuse_ms;
+  std::vector<double> splat_ms, fill_ms, output_ms, sample_ms;  // parts of predict
   epmap::stereo::DisparityScore ep_all, ep_first, ep_last, full_all, full_first, full_last;
   epmap::ep::EpCounters counters;
   size_t frames = 0;
@@ -398,6 +399,12 @@ std::vector<PassResult> RunPasses(const Dataset& d, const Rig& rig,
       r.share.push_back(e.recomputed_share);
       r.stereo_area.push_back(e.stereo_area_share);
       r.predict_ms.push_back(e.timings.predict_ms);
+      if (e.mode == epmap::ep::FrameMode::kPredicted) {
+        r.splat_ms.push_back(e.timings.predict.splat_ms);
+        r.fill_ms.push_back(e.timings.predict.fill_ms);
+        r.output_ms.push_back(e.timings.predict.output_ms);
+        r.sample_ms.push_back(e.timings.predict.sample_ms);
+      }
       r.compare_ms.push_back(e.timings.compare_ms);
       r.plan_ms.push_back(e.timings.plan_ms);
       r.stereo_ms.push_back(e.timings.stereo_ms);
@@ -515,6 +522,12 @@ void Summarise(const PassResult& r, int settle, Json* j) {
       .Num("stereo", Median(r.stereo_ms))
       .Num("fuse", Median(r.fuse_ms));
   j->Raw("stage_ms_median", stages.str());
+  Json predict_parts;  // over predicted frames only
+  predict_parts.Num("splat", Median(r.splat_ms))
+      .Num("fill", Median(r.fill_ms))
+      .Num("output", Median(r.output_ms))
+      .Num("sample", Median(r.sample_ms));
+  j->Raw("predict_ms_median", predict_parts.str());
   Json c;
   c.Int("predicted", static_cast<long long>(r.counters.predicted))
       .Int("full_first", static_cast<long long>(r.counters.full_first))

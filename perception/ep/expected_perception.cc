@@ -222,10 +222,10 @@ bool ExpectedPerception::ReturnToEarlierView(
     return static_cast<double>(stamp_ns - v.stamp_ns) * 1e-9 > params_.earlier_view_max_age_s;
   };
   while (!earlier_views_.empty() && too_old(earlier_views_.front())) earlier_views_.pop_front();
-  // The map being left: its points may live in the generator's scratch, which the next
+  // The map being left: its offsets may live in the generator's scratch, which the next
   // prediction overwrites, so they are copied (only at pose jumps).
   EarlierView leaving{std::move(state_), last_T_base_cam0_, last_stamp_ns_};
-  leaving.state.points = leaving.state.points.clone();
+  leaving.state.offsets = leaving.state.offsets.clone();
   state_ = MapState{};
   // The newest earlier view the camera is back at, if any.
   for (auto it = earlier_views_.rbegin(); it != earlier_views_.rend(); ++it) {
@@ -312,6 +312,7 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
       auto t0 = Clock::now();
       pred = Predict(state_, T_cur_prev, camera_, params_.prediction, &scratch_);
       res->timings.predict_ms = MsSince(t0);
+      res->timings.predict = pred.timings;
       t0 = Clock::now();
       // Where the prediction comes from points that moved on their own last frame (planned
       // below too): the comparator keeps following what it found moving; and where it comes
@@ -530,15 +531,22 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
   // unseen where nothing was measured and SGBM never looked (its blind margins, unseen points
   // carried along and not recomputed, deferred strips). One pass over the rows.
   const bool predicted = mode == FrameMode::kPredicted;
-  state_.points = predicted ? pred.points  // owned by this frame's prediction, not the result
-                            : cv::Mat(size, CV_32FC3);
-  state_.flags.create(size, CV_8U);  // a fresh buffer: the prediction's flags are read below
+  state_.offsets = predicted ? pred.offsets  // owned by this frame's prediction, not the result
+                             : cv::Mat(size, CV_16SC2);
+  // The previous map's buffers (Predict is done with them); fresh ones where they are the
+  // prediction's, which is read below.
+  state_.flags.create(size, CV_8U);
   if (predicted && state_.flags.data == pred.flags.data) state_.flags = cv::Mat(size, CV_8U);
-  const float fb = static_cast<float>(camera_.fx * camera_.baseline_m);
+  state_.disparity.create(size, CV_32F);
+  if (predicted && state_.disparity.data == pred.geometry.data) {
+    state_.disparity = cv::Mat(size, CV_32F);
+  }
   cv::parallel_for_(cv::Range(0, size.height), [&](const cv::Range& rows) {
     const float nan = std::numeric_limits<float>::quiet_NaN();
     for (int v = rows.start; v < rows.end; ++v) {
-      auto* p = state_.points.ptr<cv::Vec3f>(v);
+      float* point_d = state_.disparity.ptr<float>(v);
+      int16_t* offsets = state_.offsets.ptr<int16_t>(v);
+      const float* predicted_d = predicted ? pred.geometry.ptr<float>(v) : nullptr;
       const float* fresh = res->disparity.ptr<float>(v);
       // The fill of SGBM's gaps, only where a pixel needs it (on predicted frames few do).
       RowGap gap;
@@ -550,7 +558,6 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
       const uint8_t* later = deferred.empty() ? nullptr : deferred.ptr<uint8_t>(v);
       const uint8_t* in_question = uncertain.empty() ? nullptr : uncertain.ptr<uint8_t>(v);
       uint8_t* flags = state_.flags.ptr<uint8_t>(v);
-      const float ray_y = static_cast<float>((v - camera_.cy) / camera_.fy);
       for (int u = 0; u < size.width; ++u) {
         const bool measured = fresh[u] > 0;  // false for NaN
         uint8_t f = measured ? kMeasured : 0;
@@ -576,14 +583,12 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
         } else if (hole[u] && !(later && later[u])) {  // no predicted point here
           d = fill_at(u);
         } else {
-          continue;  // the predicted point stays
+          point_d[u] = predicted_d[u];  // the predicted point stays, where it stands
+          continue;
         }
-        if (d > kMinPointDisparity) {  // false for NaN
-          const float z = fb / d;
-          p[u] = cv::Vec3f(static_cast<float>((u - camera_.cx) / camera_.fx) * z, ray_y * z, z);
-        } else {
-          p[u] = cv::Vec3f(nan, nan, nan);
-        }
+        // A fresh point, at the pixel centre.
+        point_d[u] = d > kMinPointDisparity ? d : nan;  // false for NaN
+        offsets[2 * u] = offsets[2 * u + 1] = 0;
       }
     }
   });

@@ -141,11 +141,12 @@ enum class FrameMode {
 const char* ToString(FrameMode mode);
 
 struct EpTimings {
-  double predict_ms = 0;  // generator: D_-, L_-, C_-
-  double compare_ms = 0;  // comparator: E, C, A, threshold, specks; stereo check
-  double plan_ms = 0;     // recompute mask, unexpected mask, regions
-  double stereo_ms = 0;   // SGBM (regions or full frame)
-  double fuse_ms = 0;     // map update and the state for the next frame
+  double predict_ms = 0;        // generator: D_-, L_-, C_-
+  Prediction::Timings predict;  // ... of which its parts
+  double compare_ms = 0;        // comparator: E, C, A, threshold, specks; stereo check
+  double plan_ms = 0;           // recompute mask, unexpected mask, regions
+  double stereo_ms = 0;         // SGBM (regions or full frame)
+  double fuse_ms = 0;           // map update and the state for the next frame
   double total_ms = 0;
 };
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -16,6 +17,11 @@ namespace {
 
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 
+using Clock = std::chrono::steady_clock;
+double MsBetween(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double, std::milli>(b - a).count();
+}
+
 void CheckCamera(const stereo::RectifiedGeometry& camera) {
   if (camera.width <= 0 || camera.height <= 0 || !(camera.fx > 0) || !(camera.fy > 0) ||
       !(camera.baseline_m > 0)) {
@@ -28,8 +34,11 @@ void CheckInputs(const MapState& s, const stereo::RectifiedGeometry& camera,
   CheckCamera(camera);
   params.Validate();
   const cv::Size size(camera.width, camera.height);
-  if (s.points.type() != CV_32FC3 || s.points.size() != size) {
-    throw std::invalid_argument("EP generator: points must be CV_32FC3 of the camera's size");
+  if (s.disparity.type() != CV_32FC1 || s.disparity.size() != size) {
+    throw std::invalid_argument("EP generator: disparity must be CV_32FC1 of the camera's size");
+  }
+  if (s.offsets.type() != CV_16SC2 || s.offsets.size() != size) {
+    throw std::invalid_argument("EP generator: offsets must be CV_16SC2 of the camera's size");
   }
   if (s.flags.type() != CV_8UC1 || s.flags.size() != size) {
     throw std::invalid_argument("EP generator: flags must be CV_8UC1 of the camera's size");
@@ -45,27 +54,36 @@ void CheckInputs(const MapState& s, const stereo::RectifiedGeometry& camera,
   if (!T.matrix().allFinite()) throw std::invalid_argument("EP generator: motion is not finite");
 }
 
-// The working state of one prediction: the moved points, their flags and their disparities
-// (0 = empty), all of one frame's size.
+// The working state of one prediction: the moved points (disparity, 0 = empty, and offset
+// from the pixel centre) and their flags, all of one frame's size.
 struct Splat {
   int W = 0, H = 0;
-  float fx = 0, fy = 0, cx = 0, cy = 0, fb = 0;
-  cv::Mat points;     // CV_32FC3
+  cv::Mat offsets;    // CV_16SC2, in 1 / kOffsetScale px
   cv::Mat flags;      // CV_8U
-  cv::Mat disparity;  // CV_32F, fb / z of the point held, 0 = empty
+  cv::Mat disparity;  // CV_32F, 0 = empty
 
-  void Set(int u, int v, float x, float y, float z, uint8_t f) {
-    float* p = points.ptr<float>(v) + 3 * u;
-    p[0] = x;
-    p[1] = y;
-    p[2] = z;
+  // The point at (u + du, v + dv) at disparity d (du, dv in pixels).
+  void Set(int u, int v, float d, float du, float dv, uint8_t f) {
+    int16_t* o = offsets.ptr<int16_t>(v) + 2 * u;
+    o[0] = ToOffset(du);
+    o[1] = ToOffset(dv);
     flags.at<uint8_t>(v, u) = f;
-    disparity.at<float>(v, u) = fb / z;
+    disparity.at<float>(v, u) = d;
   }
-  // The point on pixel (u, v)'s ray at disparity d.
-  void SetOnRay(int u, int v, float d, uint8_t f) {
-    const float z = fb / d;
-    Set(u, v, (static_cast<float>(u) - cx) / fx * z, (static_cast<float>(v) - cy) / fy * z, z, f);
+  // The point on pixel (u, v)'s ray (its centre) at disparity d.
+  void SetOnRay(int u, int v, float d, uint8_t f) { Set(u, v, d, 0.0F, 0.0F, f); }
+  // Where the point held by (u, v) lies, relative to that pixel's centre (pixels).
+  float OffsetU(int u, int v) const {
+    return static_cast<float>(offsets.ptr<int16_t>(v)[2 * u]) * (1.0F / kOffsetScale);
+  }
+  float OffsetV(int u, int v) const {
+    return static_cast<float>(offsets.ptr<int16_t>(v)[2 * u + 1]) * (1.0F / kOffsetScale);
+  }
+
+  // Rounded to the nearest unit (by truncation of a positive number: no call to lround).
+  static int16_t ToOffset(float px) {
+    constexpr float kBias = 32768.0F;
+    return static_cast<int16_t>(static_cast<int>(px * kOffsetScale + kBias + 0.5F) - 32768);
   }
 };
 
@@ -88,14 +106,12 @@ void ExtendFootprints(const PredictionParams& params, Splat* s) {
           const int vn = v + dv;
           if (vn < 0 || vn >= H) continue;
           const float* d_row = s->disparity.ptr<float>(vn);
-          const float* p_row = s->points.ptr<float>(vn);
           for (int du = -1; du <= 1; ++du) {
             const int un = u + du;
             if (un < 0 || un >= W || !(d_row[un] > 0)) continue;
             // The neighbour's projection relative to this pixel's centre.
-            const float* p = p_row + 3 * un;
-            const float ou = s->fx * p[0] / p[2] + s->cx - static_cast<float>(u);
-            const float ov = s->fy * p[1] / p[2] + s->cy - static_cast<float>(v);
+            const float ou = static_cast<float>(du) + s->OffsetU(un, vn);
+            const float ov = static_cast<float>(dv) + s->OffsetV(un, vn);
             if (std::abs(ou) > radius || std::abs(ov) > radius) continue;
             const float d = d_row[un], dist2 = ou * ou + ov * ov;
             const bool better =
@@ -114,8 +130,10 @@ void ExtendFootprints(const PredictionParams& params, Splat* s) {
   });
   for (const auto& row : copies) {
     for (const Copy& c : row) {
-      const float* p = s->points.ptr<float>(c.from_v) + 3 * c.from_u;
-      s->Set(c.u, c.v, p[0], p[1], p[2], s->flags.at<uint8_t>(c.from_v, c.from_u));
+      s->Set(c.u, c.v, s->disparity.at<float>(c.from_v, c.from_u),
+             static_cast<float>(c.from_u - c.u) + s->OffsetU(c.from_u, c.from_v),
+             static_cast<float>(c.from_v - c.v) + s->OffsetV(c.from_u, c.from_v),
+             s->flags.at<uint8_t>(c.from_v, c.from_u));
     }
   }
 }
@@ -123,7 +141,7 @@ void ExtendFootprints(const PredictionParams& params, Splat* s) {
 void FillCracks(const PredictionParams& params, Splat* s) {
   struct Fill {
     int u, v;
-    float x, y, z;
+    float d, du, dv;
     uint8_t flags;
   };
   const float max_step = static_cast<float>(params.crack_max_step_px);
@@ -148,21 +166,23 @@ void FillCracks(const PredictionParams& params, Splat* s) {
       }
       for (int e = 0; e < n_empty; ++e) {
         const int u = empty[static_cast<size_t>(e)];
-        float sx = 0, sy = 0, sz = 0, d_min = 1e30F, d_max = -1e30F;
+        // The mean of the neighbours' points, as disparity and position (within one surface,
+        // d_max - d_min <= max_step, the same as the mean 3-D point to first order).
+        float sd = 0, su = 0, sv = 0, d_min = 1e30F, d_max = -1e30F;
         int n = 0, n_measured = 0;
         uint8_t dynamic = 0;
         for (int dv = -1; dv <= 1; ++dv) {
           const float* d_row = s->disparity.ptr<float>(v + dv);
-          const float* p_row = s->points.ptr<float>(v + dv);
+          const int16_t* o_row = s->offsets.ptr<int16_t>(v + dv);
           const uint8_t* f_row = s->flags.ptr<uint8_t>(v + dv);
           for (int du = -1; du <= 1; ++du) {
             const float d = d_row[u + du];
             if (!(d > 0)) continue;
             d_min = std::min(d_min, d);
             d_max = std::max(d_max, d);
-            sx += p_row[3 * (u + du)];
-            sy += p_row[3 * (u + du) + 1];
-            sz += p_row[3 * (u + du) + 2];
+            sd += d;
+            su += static_cast<float>(du * kOffsetScale + o_row[2 * (u + du)]);
+            sv += static_cast<float>(dv * kOffsetScale + o_row[2 * (u + du) + 1]);
             ++n;
             n_measured += (f_row[u + du] & kMeasured) ? 1 : 0;
             dynamic |= f_row[u + du] & (kDynamic | kUnseen);
@@ -170,7 +190,8 @@ void FillCracks(const PredictionParams& params, Splat* s) {
         }
         if (n >= 3 && d_max - d_min <= max_step) {
           const float inv = 1.0F / static_cast<float>(n);
-          out.push_back({u, v, sx * inv, sy * inv, sz * inv,
+          constexpr float kToPx = 1.0F / kOffsetScale;
+          out.push_back({u, v, sd * inv, su * inv * kToPx, sv * inv * kToPx,
                          static_cast<uint8_t>((2 * n_measured > n ? kMeasured : 0) | dynamic)});
         }
       }
@@ -185,7 +206,7 @@ void FillCracks(const PredictionParams& params, Splat* s) {
   cv::parallel_for_(cv::Range(0, static_cast<int>(firsts.size())), [&](const cv::Range& range) {
     for (int k = range.start; k < range.end; ++k) {
       for (const Fill& f : fills[firsts[static_cast<size_t>(k)]]) {
-        s->Set(f.u, f.v, f.x, f.y, f.z, f.flags);
+        s->Set(f.u, f.v, f.d, f.du, f.dv, f.flags);
       }
     }
   });
@@ -303,7 +324,7 @@ void FillSmallHoles(const PredictionParams& params, Splat* s) {
 // The moved point that lands on pixel (ui, vi) at sub-pixel offset (du, dv) from its centre.
 struct Landing {
   int ui, vi;
-  float x, y, z, d, du, dv;
+  float d, du, dv;
   uint8_t flags;
 };
 
@@ -315,98 +336,90 @@ struct SplatMotion {
   int W, H;
 };
 
-// Where the points land: one frame's points (3 floats), flags and disparities (0 = empty).
+// Where the points land: one frame's offsets (2 x int16), flags and disparities (0 = empty).
 struct SplatTarget {
-  float* points;
+  int16_t* offsets;
   uint8_t* flags;
   float* disparity;
 };
 
 // Writes a point if it beats the pixel's current one: between two surfaces the nearer point,
-// on one surface the point nearer to the pixel centre. Scalar arguments, not a Landing: built
-// in memory, the struct kept the hot loop's values out of registers.
-inline void LandAt(const SplatMotion& m, const SplatTarget& t, int ui, int vi, float x, float y,
-                   float z, float d, float du, float dv, uint8_t flags) {
+// on one surface the point nearer to the pixel centre (compared on the stored offsets). Scalar
+// arguments, not a Landing: built in memory, the struct kept the hot loop's values out of
+// registers.
+inline void LandAt(const SplatMotion& m, const SplatTarget& t, int ui, int vi, float d, float du,
+                   float dv, uint8_t flags) {
   const size_t idx = static_cast<size_t>(vi) * static_cast<size_t>(m.W) + static_cast<size_t>(ui);
   const float d_old = t.disparity[idx];  // 0 when empty
-  float* dst = t.points + 3 * idx;
+  int16_t* dst = t.offsets + 2 * idx;
+  const int16_t ou = Splat::ToOffset(du), ov = Splat::ToOffset(dv);
   if (d_old != 0.0F) {
     if (std::abs(d - d_old) > m.max_step) {
       if (d < d_old) return;  // behind the current surface
-    } else {
-      const float inv = 1.0F / dst[2];
-      const float du_old = m.fx * dst[0] * inv + m.cx - static_cast<float>(ui);
-      const float dv_old = m.fy * dst[1] * inv + m.cy - static_cast<float>(vi);
-      if (du * du + dv * dv >= du_old * du_old + dv_old * dv_old) return;
+    } else if (ou * ou + ov * ov >= dst[0] * dst[0] + dst[1] * dst[1]) {
+      return;
     }
   }
-  dst[0] = x;
-  dst[1] = y;
-  dst[2] = z;
+  dst[0] = ou;
+  dst[1] = ov;
   t.flags[idx] = flags;
   t.disparity[idx] = d;
 }
 
 inline void Land(const SplatMotion& m, const Landing& l, const SplatTarget& t) {
-  LandAt(m, t, l.ui, l.vi, l.x, l.y, l.z, l.d, l.du, l.dv, l.flags);
+  LandAt(m, t, l.ui, l.vi, l.d, l.du, l.dv, l.flags);
 }
 
-// One row of moved points, projected: coordinates in the new camera frame, disparity, and the
-// sub-pixel position in the new image (u = -1 where the point does not land: none, behind the
-// camera, outside the image). Kept apart from the landing, which is sequential, so that this
-// loop vectorises.
+// One row of moved points, projected: disparity and sub-pixel position in the new image
+// (u = -1 where the point does not land: none, behind the camera, outside the image). Kept
+// apart from the landing, which is sequential, so that this loop vectorises.
 struct RowProjection {
-  std::vector<float> px, py, pz, x, y, z, d, u, v;
+  std::vector<float> ou, ov, d, u, v;
   explicit RowProjection(int width)
-      : px(static_cast<size_t>(width)),
-        py(px.size()),
-        pz(px.size()),
-        x(px.size()),
-        y(px.size()),
-        z(px.size()),
-        d(px.size()),
-        u(px.size()),
-        v(px.size()) {}
+      : ou(static_cast<size_t>(width)), ov(ou.size()), d(ou.size()), u(ou.size()), v(ou.size()) {}
 
-  void Project(const float* points, const SplatMotion& m) {
-    const int n = static_cast<int>(px.size());
+  // Row `row` of the previous map: its disparities and offsets.
+  void Project(int row, const float* disparity, const int16_t* offsets, const SplatMotion& m) {
+    const int n = static_cast<int>(ou.size());
     for (int i = 0; i < n; ++i) {  // one array per coordinate
-      px[static_cast<size_t>(i)] = points[3 * i];
-      py[static_cast<size_t>(i)] = points[3 * i + 1];
-      pz[static_cast<size_t>(i)] = points[3 * i + 2];
+      ou[static_cast<size_t>(i)] = static_cast<float>(offsets[2 * i]);
+      ov[static_cast<size_t>(i)] = static_cast<float>(offsets[2 * i + 1]);
     }
-    ProjectArrays(n, m, px.data(), py.data(), pz.data(), x.data(), y.data(), z.data(), d.data(),
-                  u.data(), v.data());
+    ProjectArrays(n, row, m, disparity, ou.data(), ov.data(), d.data(), u.data(), v.data());
   }
 
+  // X = z ((u + ou - cx) / fx, (v + ov - cy) / fy, 1) with z = fb / d_k; X' = R X + t. Divided
+  // by z: X' / z = R (a, b, 1) + t w with w = 1 / z = d_k / fb, so that one division per point
+  // (1 / (X'/z)_z) gives the new position and d' = fb / z' = fb w / (X'/z)_z.
   // __restrict: the arrays never overlap (without it the compiler must assume they might and
   // gives up vectorising).
-  static void ProjectArrays(int n, const SplatMotion& m, const float* __restrict px,
-                            const float* __restrict py, const float* __restrict pz,
-                            float* __restrict xs, float* __restrict ys, float* __restrict zs,
+  static void ProjectArrays(int n, int row, const SplatMotion& m, const float* __restrict dk,
+                            const float* __restrict ous, const float* __restrict ovs,
                             float* __restrict ds, float* __restrict us, float* __restrict vs) {
     const float r00 = m.r[0], r01 = m.r[1], r02 = m.r[2];
     const float r10 = m.r[3], r11 = m.r[4], r12 = m.r[5];
     const float r20 = m.r[6], r21 = m.r[7], r22 = m.r[8];
     const float tx = m.t[0], ty = m.t[1], tz = m.t[2];
     const float fx = m.fx, fy = m.fy, cx = m.cx, cy = m.cy, fb = m.fb, min_depth = m.min_depth;
+    const float inv_fx = 1.0F / fx, inv_fb = 1.0F / fb, to_px = 1.0F / kOffsetScale;
+    const float b0 = (static_cast<float>(row) - cy) / fy, b_per_unit = to_px / fy;
     const float u_max = static_cast<float>(m.W) - 0.5F, v_max = static_cast<float>(m.H) - 0.5F;
     constexpr float kInf = std::numeric_limits<float>::infinity();
     for (int i = 0; i < n; ++i) {
-      const float x = r00 * px[i] + r01 * py[i] + r02 * pz[i] + tx;
-      const float y = r10 * px[i] + r11 * py[i] + r12 * pz[i] + ty;
-      const float z = r20 * px[i] + r21 * py[i] + r22 * pz[i] + tz;
+      const float a = (static_cast<float>(i) + ous[i] * to_px - cx) * inv_fx;
+      const float b = b0 + ovs[i] * b_per_unit;
+      const float w = dk[i] * inv_fb;
+      const float x = r00 * a + r01 * b + r02 + tx * w;
+      const float y = r10 * a + r11 * b + r12 + ty * w;
+      const float z = r20 * a + r21 * b + r22 + tz * w;
       const float inv_z = 1.0F / z;
       const float u1 = fx * x * inv_z + cx, v1 = fy * y * inv_z + cy;
-      // No point here (NaN), behind the new camera, or outside the image (all comparisons are
-      // false for NaN; an infinite coordinate fails one of them too); & rather than &&: no
-      // branches in the loop.
-      const bool ok = (pz[i] > 0) & (pz[i] < kInf) & (z > min_depth) & (u1 > -0.5F) & (v1 > -0.5F) &
-                      (u1 < u_max) & (v1 < v_max);
-      xs[i] = x;
-      ys[i] = y;
-      zs[i] = z;
-      ds[i] = fb * inv_z;
+      // No point here (NaN or 0), an infinite disparity, behind the new camera (z' = z / w
+      // below min_depth), or outside the image (all comparisons are false for NaN); & rather
+      // than &&: no branches in the loop.
+      const bool ok = (dk[i] > 0) & (dk[i] < kInf) & (z > min_depth * w) & (u1 > -0.5F) &
+                      (v1 > -0.5F) & (u1 < u_max) & (v1 < v_max);
+      ds[i] = fb * w * inv_z;
       us[i] = ok ? u1 : -1.0F;
       vs[i] = ok ? v1 : 0.0F;
     }
@@ -423,18 +436,17 @@ void SplatRows(const MapState& previous, const SplatMotion& motion, int row_begi
   RowProjection row(W);
   for (int v = row_begin; v < row_end; ++v) {
     const uint8_t* m = previous.flags.ptr<uint8_t>(v);
-    row.Project(previous.points.ptr<float>(v), motion);
-    const float *xs = row.x.data(), *ys = row.y.data(), *zs = row.z.data(), *ds = row.d.data();
-    const float *us = row.u.data(), *vs = row.v.data();
+    row.Project(v, previous.disparity.ptr<float>(v), previous.offsets.ptr<int16_t>(v), motion);
+    const float *ds = row.d.data(), *us = row.u.data(), *vs = row.v.data();
     for (int u = 0; u < W; ++u) {
       const float u1 = us[u], v1 = vs[u];
       if (u1 == -1.0F) continue;
       const int ui = static_cast<int>(u1 + 0.5F), vi = static_cast<int>(v1 + 0.5F);
       const float du = u1 - static_cast<float>(ui), dv = v1 - static_cast<float>(vi);
       if (vi >= row_begin && vi < row_end) {
-        LandAt(motion, target, ui, vi, xs[u], ys[u], zs[u], ds[u], du, dv, m[u]);
+        LandAt(motion, target, ui, vi, ds[u], du, dv, m[u]);
       } else {
-        crossers->push_back({ui, vi, xs[u], ys[u], zs[u], ds[u], du, dv, m[u]});
+        crossers->push_back({ui, vi, ds[u], du, dv, m[u]});
       }
     }
   }
@@ -535,29 +547,20 @@ cv::Size ComparisonGrid(const stereo::RectifiedGeometry& camera, int image_step)
           (camera.height + image_step - 1) / image_step};
 }
 
-cv::Mat PointsFromDisparity(const cv::Mat& disparity, const stereo::RectifiedGeometry& camera,
-                            double min_disparity_px) {
-  CheckCamera(camera);
-  if (disparity.type() != CV_32FC1 || disparity.size() != cv::Size(camera.width, camera.height)) {
-    throw std::invalid_argument("points from disparity: CV_32FC1 of the camera's size expected");
+void SetPointsFromDisparity(const cv::Mat& disparity, MapState* state, double min_disparity_px) {
+  if (disparity.type() != CV_32FC1) {
+    throw std::invalid_argument("points from disparity: CV_32FC1 expected");
   }
-  const double fb = camera.fx * camera.baseline_m;
-  cv::Mat points(disparity.size(), CV_32FC3);
+  const float min_d = static_cast<float>(min_disparity_px);
+  state->disparity.create(disparity.size(), CV_32FC1);
   for (int v = 0; v < disparity.rows; ++v) {
     const float* d = disparity.ptr<float>(v);
-    auto* p = points.ptr<cv::Vec3f>(v);
-    const double y = (v - camera.cy) / camera.fy;
+    float* out = state->disparity.ptr<float>(v);
     for (int u = 0; u < disparity.cols; ++u) {
-      if (!(d[u] > min_disparity_px) || !std::isfinite(d[u])) {
-        p[u] = cv::Vec3f(kNaN, kNaN, kNaN);
-        continue;
-      }
-      const double z = fb / d[u];
-      p[u] = cv::Vec3f(static_cast<float>((u - camera.cx) / camera.fx * z),
-                       static_cast<float>(y * z), static_cast<float>(z));
+      out[u] = d[u] > min_d && std::isfinite(d[u]) ? d[u] : kNaN;
     }
   }
-  return points;
+  state->offsets = cv::Mat::zeros(disparity.size(), CV_16SC2);
 }
 
 Prediction Predict(const MapState& previous, const Eigen::Isometry3d& T_cur_prev,
@@ -566,20 +569,17 @@ Prediction Predict(const MapState& previous, const Eigen::Isometry3d& T_cur_prev
   CheckInputs(previous, camera, T_cur_prev, params);
   PredictionScratch local;
   PredictionScratch& mem = scratch ? *scratch : local;
-  // Of the two point buffers, the one the previous state does not use.
-  cv::Mat& points_buffer = mem.points[0].data && mem.points[0].data == previous.points.data
-                               ? mem.points[1]
-                               : mem.points[0];
+  // Of the two offset buffers, the one the previous state does not use.
+  cv::Mat& offsets_buffer = mem.offsets[0].data && mem.offsets[0].data == previous.offsets.data
+                                ? mem.offsets[1]
+                                : mem.offsets[0];
   const int W = camera.width, H = camera.height;
   Splat s;
   s.W = W;
   s.H = H;
-  s.fx = static_cast<float>(camera.fx);
-  s.fy = static_cast<float>(camera.fy);
-  s.cx = static_cast<float>(camera.cx);
-  s.cy = static_cast<float>(camera.cy);
-  s.fb = static_cast<float>(camera.fx * camera.baseline_m);  // z = fb / d
-  const float fx = s.fx, fy = s.fy, cx = s.cx, cy = s.cy, fb = s.fb;
+  const float fx = static_cast<float>(camera.fx), fy = static_cast<float>(camera.fy);
+  const float cx = static_cast<float>(camera.cx), cy = static_cast<float>(camera.cy);
+  const float fb = static_cast<float>(camera.fx * camera.baseline_m);  // z = fb / d
   const Eigen::Matrix3f R = T_cur_prev.linear().cast<float>();
   const float r00 = R(0, 0), r01 = R(0, 1), r02 = R(0, 2);
   const float r10 = R(1, 0), r11 = R(1, 1), r12 = R(1, 2);
@@ -598,14 +598,14 @@ Prediction Predict(const MapState& previous, const Eigen::Isometry3d& T_cur_prev
   //    those that land in its own half of the target rows; the few that cross the middle are
   //    written afterwards, in order (the camera moves little between frames).
   //    A pixel is empty while its disparity is 0; its point is then never read.
-  points_buffer.create(H, W, CV_32FC3);
+  offsets_buffer.create(H, W, CV_16SC2);
   mem.flags.create(H, W, CV_8U);
   mem.splat_disparity.create(H, W, CV_32F);
-  s.points = points_buffer;
+  s.offsets = offsets_buffer;
   s.flags = mem.flags;                // read only where a point landed; cleared at holes below
   s.disparity = mem.splat_disparity;  // cleared by each thread for its own rows, below
   SplatTarget target;
-  target.points = s.points.ptr<float>(0);  // all allocated whole: continuous
+  target.offsets = s.offsets.ptr<int16_t>(0);  // all allocated whole: continuous
   target.flags = s.flags.ptr<uint8_t>(0);
   target.disparity = s.disparity.ptr<float>(0);
   const SplatMotion motion{{r00, r01, r02, r10, r11, r12, r20, r21, r22},
@@ -619,6 +619,7 @@ Prediction Predict(const MapState& previous, const Eigen::Isometry3d& T_cur_prev
                            max_step,
                            W,
                            H};
+  const Clock::time_point t_splat = Clock::now();
   const int halves = H >= 64 ? 2 : 1;
   std::vector<std::vector<Landing>> crossing(static_cast<size_t>(halves));
   cv::parallel_for_(cv::Range(0, halves), [&](const cv::Range& range) {
@@ -633,11 +634,13 @@ Prediction Predict(const MapState& previous, const Eigen::Isometry3d& T_cur_prev
   }
   // ... and an empty pixel takes the best point held by a neighbour whose projection lies
   // within splat_radius_px of its own centre (a footprint of 1.5 px).
+  const Clock::time_point t_fill = Clock::now();
   if (params.splat_radius_px > 0.5) ExtendFootprints(params, &s);
   FillCracks(params, &s);
   if (params.max_hole_fill_px > 0) FillSmallHoles(params, &s);
 
   // The predicted disparity and the holes, at full resolution.
+  const Clock::time_point t_output = Clock::now();
   Prediction out;
   // D_- gets a buffer of its own each frame: the caller makes it the frame's map.
   out.disparity.create(H, W, CV_32F);
@@ -648,16 +651,14 @@ Prediction Predict(const MapState& previous, const Eigen::Isometry3d& T_cur_prev
   cv::parallel_for_(cv::Range(0, H), [&](const cv::Range& rows) {
     int broken = 0, holes = 0;
     for (int v = rows.start; v < rows.end; ++v) {
-      float* pts = s.points.ptr<float>(v);
+      int16_t* offsets = s.offsets.ptr<int16_t>(v);
       const float* d_splat = s.disparity.ptr<float>(v);
       float* disp = out.disparity.ptr<float>(v);
       float* geo = out.geometry.ptr<float>(v);
       uint8_t* flags = s.flags.ptr<uint8_t>(v);
       uint8_t* hole = out.holes.ptr<uint8_t>(v);
       for (int u = 0; u < W; ++u) {
-        // A point is only ever written (Land, Splat::Set) with finite coordinates and its
-        // disparity fb / z; one that overflowed has d = 0 or a non-finite d, so checking d
-        // suffices (the points themselves, 12 bytes a pixel, are not read again here).
+        // A point that overflowed has d = 0 or a non-finite d: checking d suffices.
         const float d = d_splat[u];
         const bool ok = d > 0 && d < std::numeric_limits<float>::infinity();
         if (ok) {
@@ -671,8 +672,7 @@ Prediction Predict(const MapState& previous, const Eigen::Isometry3d& T_cur_prev
           disp[u] = kNaN;
           hole[u] = 255;
           flags[u] = 0;
-          float* p = pts + 3 * u;
-          p[0] = p[1] = p[2] = kNaN;
+          offsets[2 * u] = offsets[2 * u + 1] = 0;
         }
       }
     }
@@ -681,12 +681,13 @@ Prediction Predict(const MapState& previous, const Eigen::Isometry3d& T_cur_prev
   });
   out.non_finite_rejected = non_finite;
   out.hole_pixels = hole_count;
-  out.points = s.points;
+  out.offsets = s.offsets;
   out.flags = s.flags;
 
   // 2. p(L^k; T^{k+1}, D_-^{k+1}) and p(C^k; ...) (Sec. IV-A) on the comparison grid: each of
   //    its pixel centres is back-projected at its point's depth into frame k
   //    (ProjectGridRowIntoPrevious), where L^k and C^k are interpolated (SampleGridRow).
+  const Clock::time_point t_sample = Clock::now();
   const int step = params.image_step;
   const cv::Size grid = ComparisonGrid(camera, step);
   out.image.create(grid, CV_32F);
@@ -707,6 +708,10 @@ Prediction Predict(const MapState& previous, const Eigen::Isometry3d& T_cur_prev
                     out.image_valid.ptr<uint8_t>(i));
     }
   });
+  out.timings.splat_ms = MsBetween(t_splat, t_fill);
+  out.timings.fill_ms = MsBetween(t_fill, t_output);
+  out.timings.output_ms = MsBetween(t_output, t_sample);
+  out.timings.sample_ms = MsBetween(t_sample, Clock::now());
   return out;
 }
 

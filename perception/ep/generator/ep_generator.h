@@ -8,13 +8,15 @@
 // disocclusions).
 //
 // The map is kept as one 3-D point per pixel (camera frame), not as a disparity at the pixel
-// centre: p_D moves each point rigidly by T_{k+1,k} and re-projects it. Points keep their exact
-// positions from frame to frame, so that a depth edge moves with the camera by fractions of a
-// pixel per frame; re-deriving the points from pixel centres each frame (our first version)
-// rounds every edge back onto the grid each frame, and under slow motion the predicted edges
-// stayed put while the real ones moved (measured: bad-2 of the map grew by ~9 points in 60
-// frames of a synthetic pan, versus none with points). Each pixel takes the nearest point
-// (z-buffer), then, if still empty, the best point of a neighbour projecting within
+// centre: p_D moves each point rigidly by T_{k+1,k} and re-projects it. A point is stored as its
+// disparity and where it lies from its pixel's centre (two 16-bit sub-pixel offsets): 8 bytes
+// instead of 12 for x, y, z, and the splat no longer re-derives each point's position to
+// compare it with a rival. Points keep their exact positions from frame to frame, so that a depth
+// edge moves with the camera by fractions of a pixel per frame; re-deriving the points from pixel
+// centres each frame (our first version) rounds every edge back onto the grid each frame, and under
+// slow motion the predicted edges stayed put while the real ones moved (measured: bad-2 of the map
+// grew by ~9 points in 60 frames of a synthetic pan, versus none with points). Each pixel takes the
+// nearest point (z-buffer), then, if still empty, the best point of a neighbour projecting within
 // splat_radius_px of its centre; single-pixel cracks within one surface are closed by
 // averaging, and small interior holes by interpolation along their row.
 //
@@ -46,9 +48,15 @@ enum PointFlags : uint8_t {
   kRetryMask = 0x78,
 };
 
-// The map at frame k, as the generator needs it.
+// A point's offset from its pixel centre is stored in units of 1 / kOffsetScale px (CV_16SC2:
+// +-32 px, far more than a splat footprint; a 0.0005 px rounding, far below SGBM's 1/16 px).
+constexpr float kOffsetScale = 1024.0F;
+
+// The map at frame k, as the generator needs it: per pixel one point, at disparity d (its
+// depth z = fx * baseline / d) on the ray through (u + ou / kOffsetScale, v + ov / kOffsetScale).
 struct MapState {
-  cv::Mat points;       // CV_32FC3 3-D point per pixel, camera frame k (m); NaN = none
+  cv::Mat disparity;    // CV_32F d of each pixel's point; NaN (or <= 0) = none
+  cv::Mat offsets;      // CV_16SC2 (ou, ov) of each point
   cv::Mat flags;        // CV_8U PointFlags of each point
   cv::Mat image;        // CV_8U grey L^k, full resolution
   cv::Mat accumulated;  // CV_32F C^k (grey levels), on the comparison grid
@@ -81,7 +89,7 @@ struct PredictionParams {
 struct Prediction {
   cv::Mat disparity;  // D_-: CV_32F, NaN where unknown (holes, and where the point is a fill)
   cv::Mat geometry;   // CV_32F disparity of every predicted point (measured or fill), NaN at holes
-  cv::Mat points;     // CV_32FC3 the moved points, camera frame k+1; NaN at holes
+  cv::Mat offsets;    // CV_16SC2 where the moved points lie from their pixel centres (MapState)
   cv::Mat flags;      // CV_8U PointFlags of the predicted points (0 at holes)
   cv::Mat holes;      // CV_8U, 255 where nothing of frame k projects (or is non-finite)
   // On the comparison grid (full size / image_step):
@@ -90,16 +98,21 @@ struct Prediction {
   cv::Mat image_valid;          // CV_8U 255 where L_- and C_- exist
   int non_finite_rejected = 0;  // values that came out non-finite and were made holes
   int hole_pixels = 0;          // pixels of `holes`
+  // Where Predict's time went (wall clock, ms): moving and landing the points, the footprint,
+  // crack and hole fills, the full-size outputs, L_- and C_- on the comparison grid.
+  struct Timings {
+    double splat_ms = 0, fill_ms = 0, output_ms = 0, sample_ms = 0;
+  } timings;
 };
 
 // Memory a caller may lend to Predict so that the same large buffers are not allocated (and
 // first touched, page by page) at every frame: about a tenth of a frame's work. Predict writes
-// into it; the Prediction's points, flags and geometry then live there (the points
+// into it; the Prediction's offsets, flags and geometry then live there (the offsets
 // alternate between two buffers, so that a state made of the last prediction can be read while
 // the next one is written; the disparity has its own buffer, which the caller may keep). Give
 // one scratch to one pipeline; never publish what lives in it.
 struct PredictionScratch {
-  cv::Mat points[2], flags, splat_disparity, geometry;
+  cv::Mat offsets[2], flags, splat_disparity, geometry;
 };
 
 // T_cur_prev maps points of the previous camera frame into the current one
@@ -113,9 +126,9 @@ Prediction Predict(const MapState& previous, const Eigen::Isometry3d& T_cur_prev
 // The size of the comparison grid for a camera and a step.
 cv::Size ComparisonGrid(const stereo::RectifiedGeometry& camera, int image_step);
 
-// Back-projects a disparity map (CV_32F, NaN or <= min_disparity_px = none) into one point per
-// pixel centre (CV_32FC3, camera frame, NaN = none).
-cv::Mat PointsFromDisparity(const cv::Mat& disparity, const stereo::RectifiedGeometry& camera,
+// Sets the map's points from a disparity image (CV_32F): one point at each pixel centre, none
+// (NaN) where the disparity is not above min_disparity_px or not finite.
+void SetPointsFromDisparity(const cv::Mat& disparity, MapState* state,
                             double min_disparity_px = 0.25);
 
 }  // namespace epmap::ep

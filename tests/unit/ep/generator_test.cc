@@ -20,7 +20,7 @@ using ep::PredictionParams;
 MapState StateOf(const testing::SyntheticScene& scene, const cv::Mat& left,
                  const cv::Mat& disparity, int image_step) {
   MapState s;
-  s.points = ep::PointsFromDisparity(disparity, scene.camera());
+  ep::SetPointsFromDisparity(disparity, &s);
   s.flags = cv::Mat(disparity.size(), CV_8U, cv::Scalar(0));
   s.flags.setTo(ep::kMeasured, disparity > 0);
   s.image = left;
@@ -97,10 +97,12 @@ TEST(EpGenerator, BrokenValuesNeverComeOutAsPredictions) {
   MapState s = StateOf(scene, l, d, 2);
   const float inf = std::numeric_limits<float>::infinity();
   const float nan = std::numeric_limits<float>::quiet_NaN();
-  s.points.at<cv::Vec3f>(100, 100) = cv::Vec3f(inf, 0, 2);
-  s.points.at<cv::Vec3f>(100, 101) = cv::Vec3f(0, 0, inf);
-  s.points.at<cv::Vec3f>(100, 102) = cv::Vec3f(nan, 1, 2);
-  s.points.at<cv::Vec3f>(100, 103) = cv::Vec3f(0, 0, -1);  // behind the camera
+  s.disparity.at<float>(100, 100) = inf;                         // at the camera
+  s.disparity.at<float>(100, 101) = nan;                         // none
+  s.disparity.at<float>(100, 102) = -1;                          // behind the camera
+  s.disparity.at<float>(100, 103) = 1e-30F;                      // at infinity
+  s.disparity.at<float>(100, 104) = 1e30F;                       // at the camera, finite
+  s.offsets.at<cv::Vec2s>(100, 105) = cv::Vec2s(32767, -32768);  // far from its pixel
   s.accumulated.at<float>(50, 50) = nan;
   const Prediction p = ep::Predict(s, testing::HeadPose(0.01, 0).inverse(), scene.camera());
   for (int v = 0; v < p.disparity.rows; ++v) {
@@ -109,14 +111,46 @@ TEST(EpGenerator, BrokenValuesNeverComeOutAsPredictions) {
       // Unknown is NaN, anything else is a finite positive disparity.
       ASSERT_TRUE(std::isnan(x) || (std::isfinite(x) && x > 0)) << u << "," << v;
       ASSERT_EQ(std::isnan(g), p.holes.at<uint8_t>(v, u) != 0) << u << "," << v;
-      const cv::Vec3f& q = p.points.at<cv::Vec3f>(v, u);
-      ASSERT_EQ(std::isfinite(q[2]), !p.holes.at<uint8_t>(v, u)) << u << "," << v;
+      ASSERT_EQ(g > 0, !p.holes.at<uint8_t>(v, u)) << u << "," << v;
     }
   }
   cv::Mat finite_c = p.accumulated == p.accumulated;
   EXPECT_EQ(cv::countNonZero(finite_c), static_cast<int>(p.accumulated.total()));
   cv::Mat finite_l = p.image == p.image;
   EXPECT_EQ(cv::countNonZero(finite_l), static_cast<int>(p.image.total()));
+}
+
+TEST(EpGenerator, PointsKeepTheirSubPixelPositionsFromFrameToFrame) {
+  // A wall at 20 px of disparity; the camera slides so that it moves 0.25 px a frame in the
+  // image. Rounded to pixel centres each frame, it would never move at all.
+  const testing::SyntheticScene scene;
+  const cv::Size size(scene.camera().width, scene.camera().height);
+  const float wall_d = 20.0F;
+  cv::Mat l(size, CV_8U, cv::Scalar(128));
+  MapState s = StateOf(scene, l, cv::Mat(size, CV_32F, cv::Scalar(wall_d)), 2);
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.translation().x() = 0.25 * scene.camera().baseline_m / wall_d;  // du = fx t_x / z
+  const int u = size.width / 2, v = size.height / 2;
+  constexpr float kUnit = 1.0F / ep::kOffsetScale;
+  for (int frame = 1; frame <= 4; ++frame) {
+    const Prediction p = ep::Predict(s, T, scene.camera());
+    s.disparity = p.geometry.clone();
+    s.offsets = p.offsets.clone();
+    s.flags = p.flags.clone();
+    // Where the point held by the pixel lies from its centre: 0.25, -0.5 (or 0.5), -0.25, 0.
+    const float ou = static_cast<float>(s.offsets.at<cv::Vec2s>(v, u)[0]) * kUnit;
+    const float expected = frame == 1 ? 0.25F : frame == 3 ? -0.25F : 0.0F;
+    if (frame == 2) {
+      EXPECT_NEAR(std::abs(ou), 0.5F, 4 * kUnit) << frame;
+    } else {
+      EXPECT_NEAR(ou, expected, 4 * kUnit) << frame;
+    }
+    EXPECT_NEAR(s.offsets.at<cv::Vec2s>(v, u)[1] * kUnit, 0.0F, 4 * kUnit) << frame;
+    EXPECT_NEAR(s.disparity.at<float>(v, u), wall_d, 1e-3F) << frame;
+  }
+  // After four frames the wall has moved one whole pixel: the first column is uncovered.
+  EXPECT_TRUE(std::isnan(s.disparity.at<float>(v, 0)));
+  EXPECT_NEAR(s.disparity.at<float>(v, 1), wall_d, 1e-3F);
 }
 
 TEST(EpGenerator, RejectsInconsistentInput) {
@@ -134,6 +168,10 @@ TEST(EpGenerator, RejectsInconsistentInput) {
   MapState wrong_grid = good;
   wrong_grid.accumulated = cv::Mat::zeros(l.size(), CV_32F);  // full size, but step is 2
   EXPECT_THROW(ep::Predict(wrong_grid, Eigen::Isometry3d::Identity(), scene.camera()),
+               std::invalid_argument);
+  MapState wrong_offsets = good;
+  wrong_offsets.offsets = cv::Mat::zeros(l.size(), CV_32FC2);
+  EXPECT_THROW(ep::Predict(wrong_offsets, Eigen::Isometry3d::Identity(), scene.camera()),
                std::invalid_argument);
   PredictionParams params;
   params.image_step = 3;
