@@ -45,6 +45,7 @@
 #include "common/imaging/pfm.h"
 #include "perception/ep/ep_settings.h"
 #include "perception/ep/expected_perception.h"
+#include "perception/ep/update/roi_stereo.h"
 #include "perception/internal_model/learned_pose_model.h"
 #include "perception/internal_model/pose_source.h"
 #include "perception/kinematics/urdf_chain.h"
@@ -315,6 +316,11 @@ struct PassResult {
   std::vector<double> predict_ms, compare_ms, plan_ms, stereo_ms, fuse_ms;
   std::vector<double> splat_ms, fill_ms, output_ms, sample_ms;  // parts of predict
   epmap::stereo::DisparityScore ep_all, ep_first, ep_last, full_all, full_first, full_last;
+  // The same over the columns SGBM can match (RoiStereo's matchable columns): there the EP map
+  // competes with full-frame SGBM on equal terms; in the left margin only the EP can know
+  // anything (what it saw there before the head turned).
+  epmap::stereo::DisparityScore ep_matchable, ep_matchable_first, ep_matchable_last, full_matchable,
+      full_matchable_first, full_matchable_last;
   epmap::ep::EpCounters counters;
   size_t frames = 0;
 };
@@ -359,6 +365,7 @@ std::vector<PassResult> RunPasses(const Dataset& d, const Rig& rig,
     eps.push_back(std::make_unique<epmap::ep::ExpectedPerception>(rig.geometry, params));
   }
   const epmap::stereo::SgbmMatcher full(params.sgbm);
+  cv::Mat matchable;  // CV_8U 255 on the columns SGBM can match, made at the first frame
   std::vector<PassResult> results(poses.size());
   for (auto& r : results) r.frames = n_frames;
   const size_t jobs = poses.size() + 1;  // the EPs, then full SGBM
@@ -384,9 +391,22 @@ std::vector<PassResult> RunPasses(const Dataset& d, const Rig& rig,
         ep_cpu_ms[job] = ProcessCpuMs() - cpu0;
       }
     }
+    if (matchable.empty() && !f.gt_disparity.empty()) {
+      const epmap::ep::RoiStereo columns(params.sgbm);
+      const int first = columns.first_matchable_column();
+      const int last = columns.last_matchable_column(f.gt_disparity.cols);
+      matchable = cv::Mat::zeros(f.gt_disparity.size(), CV_8U);
+      if (last >= first) {
+        matchable.colRange(first, last + 1).setTo(255);
+      }
+    }
     const auto full_score = f.gt_disparity.empty()
                                 ? epmap::stereo::DisparityScore{}
                                 : epmap::stereo::ScoreDisparity(full_disp, f.gt_disparity);
+    const auto full_matchable_score =
+        f.gt_disparity.empty()
+            ? epmap::stereo::DisparityScore{}
+            : epmap::stereo::ScoreDisparity(full_disp, f.gt_disparity, 2.0, matchable);
     for (size_t p = 0; p < poses.size(); ++p) {
       PassResult& r = results[p];
       const auto& e = *res[p];
@@ -431,15 +451,22 @@ std::vector<PassResult> RunPasses(const Dataset& d, const Rig& rig,
       }
       if (!f.gt_disparity.empty()) {
         const auto s = epmap::stereo::ScoreDisparity(e.disparity, f.gt_disparity);
+        const auto sm = epmap::stereo::ScoreDisparity(e.disparity, f.gt_disparity, 2.0, matchable);
         Add(&r.ep_all, s);
         Add(&r.full_all, full_score);
+        Add(&r.ep_matchable, sm);
+        Add(&r.full_matchable, full_matchable_score);
         if (i < 50) {
           Add(&r.ep_first, s);
           Add(&r.full_first, full_score);
+          Add(&r.ep_matchable_first, sm);
+          Add(&r.full_matchable_first, full_matchable_score);
         }
         if (i + 50 >= n_frames) {
           Add(&r.ep_last, s);
           Add(&r.full_last, full_score);
+          Add(&r.ep_matchable_last, sm);
+          Add(&r.full_matchable_last, full_matchable_score);
         }
       }
       if (!f.gt_unexpected.empty() && cv::countNonZero(f.gt_unexpected) > 0) {
@@ -487,6 +514,12 @@ void Summarise(const PassResult& r, int settle, Json* j) {
   j->Num("bad2_ep_last50", Bad(r.ep_last));
   j->Num("bad2_full_first50", Bad(r.full_first));
   j->Num("bad2_full_last50", Bad(r.full_last));
+  j->Num("bad2_ep_matchable", Bad(r.ep_matchable));
+  j->Num("bad2_full_matchable", Bad(r.full_matchable));
+  j->Num("bad2_ep_matchable_first50", Bad(r.ep_matchable_first));
+  j->Num("bad2_ep_matchable_last50", Bad(r.ep_matchable_last));
+  j->Num("bad2_full_matchable_first50", Bad(r.full_matchable_first));
+  j->Num("bad2_full_matchable_last50", Bad(r.full_matchable_last));
   j->Num("filled_share_ep", r.ep_all.gt_pixels ? r.ep_all.filled_share() : kNaN);
   j->Num("filled_share_full", r.full_all.gt_pixels ? r.full_all.filled_share() : kNaN);
   j->Int("visible_frames", static_cast<long long>(r.iou.size()));
