@@ -299,6 +299,27 @@ LearnedSetup TrainLearned(const Dataset& d, const fs::path& save_to) {
 }
 
 // ---- one pass of the EP over the sequence ----
+void Accumulate(epmap::stereo::DisparityScore* total, const epmap::stereo::DisparityScore& s) {
+  total->gt_pixels += s.gt_pixels;
+  total->filled += s.filled;
+  total->bad_filled += s.bad_filled;
+}
+
+double Bad(const epmap::stereo::DisparityScore& s) {
+  return s.gt_pixels ? s.bad_counting_unknown() : kNaN;
+}
+
+// Disparity scores summed over a sequence, its first 50 and its last 50 frames (the issue's
+// "no drift": the last 50 no worse than the first 50).
+struct SequenceScore {
+  epmap::stereo::DisparityScore all, first, last;
+  void Add(size_t frame, size_t n_frames, const epmap::stereo::DisparityScore& s) {
+    Accumulate(&all, s);
+    if (frame < 50) Accumulate(&first, s);
+    if (frame + 50 >= n_frames) Accumulate(&last, s);
+  }
+};
+
 struct PassResult {
   std::vector<double> ep_ms, full_ms, ratio, share, stereo_area;
   std::vector<double> ep_cpu_ms, full_cpu_ms, cpu_ratio;
@@ -315,24 +336,20 @@ struct PassResult {
   size_t visible_detected = 0;
   std::vector<double> predict_ms, compare_ms, plan_ms, stereo_ms, fuse_ms;
   std::vector<double> splat_ms, fill_ms, output_ms, sample_ms;  // parts of predict
-  epmap::stereo::DisparityScore ep_all, ep_first, ep_last, full_all, full_first, full_last;
+  SequenceScore ep, full;
   // The same over the columns SGBM can match (RoiStereo's matchable columns): there the EP map
   // competes with full-frame SGBM on equal terms; in the left margin only the EP can know
   // anything (what it saw there before the head turned).
-  epmap::stereo::DisparityScore ep_matchable, ep_matchable_first, ep_matchable_last, full_matchable,
-      full_matchable_first, full_matchable_last;
+  SequenceScore ep_matchable, full_matchable;
   epmap::ep::EpCounters counters;
   size_t frames = 0;
 };
 
-void Add(epmap::stereo::DisparityScore* total, const epmap::stereo::DisparityScore& s) {
-  total->gt_pixels += s.gt_pixels;
-  total->filled += s.filled;
-  total->bad_filled += s.bad_filled;
-}
-
-double Bad(const epmap::stereo::DisparityScore& s) {
-  return s.gt_pixels ? s.bad_counting_unknown() : kNaN;
+// Writes bad-2 over the whole sequence as `name`, and over its first and last 50 frames.
+void PutBad(Json* j, const std::string& name, const SequenceScore& s) {
+  j->Num(name, Bad(s.all));
+  j->Num(name + "_first50", Bad(s.first));
+  j->Num(name + "_last50", Bad(s.last));
 }
 
 // Whether a region of `e` touches the true moving thing (largest first) and, when the dataset
@@ -452,22 +469,10 @@ std::vector<PassResult> RunPasses(const Dataset& d, const Rig& rig,
       if (!f.gt_disparity.empty()) {
         const auto s = epmap::stereo::ScoreDisparity(e.disparity, f.gt_disparity);
         const auto sm = epmap::stereo::ScoreDisparity(e.disparity, f.gt_disparity, 2.0, matchable);
-        Add(&r.ep_all, s);
-        Add(&r.full_all, full_score);
-        Add(&r.ep_matchable, sm);
-        Add(&r.full_matchable, full_matchable_score);
-        if (i < 50) {
-          Add(&r.ep_first, s);
-          Add(&r.full_first, full_score);
-          Add(&r.ep_matchable_first, sm);
-          Add(&r.full_matchable_first, full_matchable_score);
-        }
-        if (i + 50 >= n_frames) {
-          Add(&r.ep_last, s);
-          Add(&r.full_last, full_score);
-          Add(&r.ep_matchable_last, sm);
-          Add(&r.full_matchable_last, full_matchable_score);
-        }
+        r.ep.Add(i, n_frames, s);
+        r.full.Add(i, n_frames, full_score);
+        r.ep_matchable.Add(i, n_frames, sm);
+        r.full_matchable.Add(i, n_frames, full_matchable_score);
       }
       if (!f.gt_unexpected.empty() && cv::countNonZero(f.gt_unexpected) > 0) {
         const cv::Mat truth = f.gt_unexpected > 0;
@@ -508,20 +513,12 @@ void Summarise(const PassResult& r, int settle, Json* j) {
   j->Num("sgbm_area_share_median", Median(r.stereo_area));
   std::vector<double> after_first(r.share.begin() + (r.share.empty() ? 0 : 1), r.share.end());
   j->Num("recomputed_share_max_after_first", Max(after_first));
-  j->Num("bad2_ep", Bad(r.ep_all));
-  j->Num("bad2_full", Bad(r.full_all));
-  j->Num("bad2_ep_first50", Bad(r.ep_first));
-  j->Num("bad2_ep_last50", Bad(r.ep_last));
-  j->Num("bad2_full_first50", Bad(r.full_first));
-  j->Num("bad2_full_last50", Bad(r.full_last));
-  j->Num("bad2_ep_matchable", Bad(r.ep_matchable));
-  j->Num("bad2_full_matchable", Bad(r.full_matchable));
-  j->Num("bad2_ep_matchable_first50", Bad(r.ep_matchable_first));
-  j->Num("bad2_ep_matchable_last50", Bad(r.ep_matchable_last));
-  j->Num("bad2_full_matchable_first50", Bad(r.full_matchable_first));
-  j->Num("bad2_full_matchable_last50", Bad(r.full_matchable_last));
-  j->Num("filled_share_ep", r.ep_all.gt_pixels ? r.ep_all.filled_share() : kNaN);
-  j->Num("filled_share_full", r.full_all.gt_pixels ? r.full_all.filled_share() : kNaN);
+  PutBad(j, "bad2_ep", r.ep);
+  PutBad(j, "bad2_full", r.full);
+  PutBad(j, "bad2_ep_matchable", r.ep_matchable);
+  PutBad(j, "bad2_full_matchable", r.full_matchable);
+  j->Num("filled_share_ep", r.ep.all.gt_pixels ? r.ep.all.filled_share() : kNaN);
+  j->Num("filled_share_full", r.full.all.gt_pixels ? r.full.all.filled_share() : kNaN);
   j->Int("visible_frames", static_cast<long long>(r.iou.size()));
   j->Num("iou_median", Median(r.iou));
   j->Num("iou_mean", Mean(r.iou));
@@ -684,7 +681,7 @@ int Run(int argc, char** argv) {
       Json rel;
       rel.Num("ep_ms_median", RelDiff(Median(lr.ep_ms), Median(main.ep_ms)));
       rel.Num("recomputed_share_median", RelDiff(Median(lr.share), Median(main.share)));
-      rel.Num("bad2_ep", RelDiff(Bad(lr.ep_all), Bad(main.ep_all)));
+      rel.Num("bad2_ep", RelDiff(Bad(lr.ep.all), Bad(main.ep.all)));
       rel.Num("iou_median", RelDiff(Median(lr.iou), Median(main.iou)));
       rel.Num("flagged_area_not_visible_mean",
               RelDiff(Mean(lr.flagged_not_visible), Mean(main.flagged_not_visible)));
