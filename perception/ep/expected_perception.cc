@@ -10,6 +10,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "common/cpu/hot_loop.h"
 #include "perception/ep/generator/disparity_fill.h"
 
 namespace epmap::ep {
@@ -145,6 +146,77 @@ void BlindMargins(int first, int last, cv::Mat* image, double value) {
   if (last + 1 < w) {
     const int x = std::max(last + 1, 0);
     (*image)(cv::Rect(x, 0, w - x, image->rows)).setTo(value);
+  }
+}
+
+// What the fusion of one frame reads (see Process, "The state for the next frame"); the
+// prediction's images are null on frames computed whole, the optional masks null when empty.
+struct FuseInputs {
+  bool predicted = false;
+  int first_column = 0, last_column = 0, retry_unmatched_frames = 0;
+  const cv::Mat* fresh = nullptr;       // the frame's disparity (SGBM where it ran)
+  const cv::Mat* recompute = nullptr;   // where SGBM ran
+  const cv::Mat* unexpected = nullptr;  // what moved on its own
+  const cv::Mat* predicted_geometry = nullptr;
+  const cv::Mat* carried_flags = nullptr;
+  const cv::Mat* holes = nullptr;
+  const cv::Mat* deferred = nullptr;   // thin border strips left for a later frame
+  const cv::Mat* uncertain = nullptr;  // where the geometry was in question
+};
+
+// Rows [row_begin, row_end) of the next state's points and flags.
+EPMAP_HOT_LOOP void FuseRows(const FuseInputs& in, int row_begin, int row_end, MapState* state) {
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const int width = in.fresh->cols;
+  const bool predicted = in.predicted;
+  const int first_column = in.first_column, last_column = in.last_column;
+  for (int v = row_begin; v < row_end; ++v) {
+    float* point_d = state->disparity.ptr<float>(v);
+    int16_t* offsets = state->offsets.ptr<int16_t>(v);
+    const float* predicted_d = predicted ? in.predicted_geometry->ptr<float>(v) : nullptr;
+    const float* fresh = in.fresh->ptr<float>(v);
+    // The fill of SGBM's gaps, only where a pixel needs it (on predicted frames few do).
+    RowGap gap;
+    const auto fill_at = [&](int u) { return FilledDisparityAt(fresh, width, u, &gap); };
+    const uint8_t* rec = in.recompute->ptr<uint8_t>(v);
+    const uint8_t* moved = in.unexpected->ptr<uint8_t>(v);
+    const uint8_t* carried = predicted ? in.carried_flags->ptr<uint8_t>(v) : nullptr;
+    const uint8_t* hole = predicted ? in.holes->ptr<uint8_t>(v) : nullptr;
+    const uint8_t* later = in.deferred ? in.deferred->ptr<uint8_t>(v) : nullptr;
+    const uint8_t* in_question = in.uncertain ? in.uncertain->ptr<uint8_t>(v) : nullptr;
+    uint8_t* flags = state->flags.ptr<uint8_t>(v);
+    for (int u = 0; u < width; ++u) {
+      const bool measured = fresh[u] > 0;  // false for NaN
+      uint8_t f = measured ? kMeasured : 0;
+      if (moved[u]) f |= kDynamic;
+      if (std::isnan(fresh[u]) && (u < first_column || u > last_column || (later && later[u]) ||
+                                   (carried && (carried[u] & kUnseen) && !rec[u]))) {
+        f |= kUnseen;
+      }
+      // Unmatched where the geometry was in question: tried again, on one frame in
+      // retry_every_frames, at most retry_unmatched_frames times; the count waits on the
+      // frames between, and ends with a match or any other re-measurement.
+      const int retries = carried ? (carried[u] & kRetryMask) >> kRetryShift : 0;
+      if (carried && in_question && in_question[u] && rec[u] && std::isnan(fresh[u])) {
+        f |= static_cast<uint8_t>((retries > 0 ? retries - 1 : in.retry_unmatched_frames)
+                                  << kRetryShift);
+      } else if (retries > 0 && !rec[u]) {
+        f |= static_cast<uint8_t>(retries << kRetryShift);  // not this frame's turn: kept
+      }
+      flags[u] = f;
+      float d;
+      if (!predicted || rec[u]) {
+        d = fresh[u] > kMinPointDisparity ? fresh[u] : fill_at(u);
+      } else if (hole[u] && !(later && later[u])) {  // no predicted point here
+        d = fill_at(u);
+      } else {
+        point_d[u] = predicted_d[u];  // the predicted point stays, where it stands
+        continue;
+      }
+      // A fresh point, at the pixel centre.
+      point_d[u] = d > kMinPointDisparity ? d : nan;  // false for NaN
+      offsets[2 * u] = offsets[2 * u + 1] = 0;
+    }
   }
 }
 
@@ -541,57 +613,23 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
   if (predicted && state_.disparity.data == pred.geometry.data) {
     state_.disparity = cv::Mat(size, CV_32F);
   }
-  cv::parallel_for_(cv::Range(0, size.height), [&](const cv::Range& rows) {
-    const float nan = std::numeric_limits<float>::quiet_NaN();
-    for (int v = rows.start; v < rows.end; ++v) {
-      float* point_d = state_.disparity.ptr<float>(v);
-      int16_t* offsets = state_.offsets.ptr<int16_t>(v);
-      const float* predicted_d = predicted ? pred.geometry.ptr<float>(v) : nullptr;
-      const float* fresh = res->disparity.ptr<float>(v);
-      // The fill of SGBM's gaps, only where a pixel needs it (on predicted frames few do).
-      RowGap gap;
-      const auto fill_at = [&](int u) { return FilledDisparityAt(fresh, size.width, u, &gap); };
-      const uint8_t* rec = res->recompute.ptr<uint8_t>(v);
-      const uint8_t* moved = res->unexpected.ptr<uint8_t>(v);
-      const uint8_t* carried = predicted ? pred.flags.ptr<uint8_t>(v) : nullptr;
-      const uint8_t* hole = predicted ? pred.holes.ptr<uint8_t>(v) : nullptr;
-      const uint8_t* later = deferred.empty() ? nullptr : deferred.ptr<uint8_t>(v);
-      const uint8_t* in_question = uncertain.empty() ? nullptr : uncertain.ptr<uint8_t>(v);
-      uint8_t* flags = state_.flags.ptr<uint8_t>(v);
-      for (int u = 0; u < size.width; ++u) {
-        const bool measured = fresh[u] > 0;  // false for NaN
-        uint8_t f = measured ? kMeasured : 0;
-        if (moved[u]) f |= kDynamic;
-        if (std::isnan(fresh[u]) && (u < first_column || u > last_column || (later && later[u]) ||
-                                     (carried && (carried[u] & kUnseen) && !rec[u]))) {
-          f |= kUnseen;
-        }
-        // Unmatched where the geometry was in question: tried again, on one frame in
-        // retry_every_frames, at most retry_unmatched_frames times; the count waits on the
-        // frames between, and ends with a match or any other re-measurement.
-        const int retries = carried ? (carried[u] & kRetryMask) >> kRetryShift : 0;
-        if (carried && in_question && in_question[u] && rec[u] && std::isnan(fresh[u])) {
-          f |= static_cast<uint8_t>((retries > 0 ? retries - 1 : params_.retry_unmatched_frames)
-                                    << kRetryShift);
-        } else if (retries > 0 && !rec[u]) {
-          f |= static_cast<uint8_t>(retries << kRetryShift);  // not this frame's turn: kept
-        }
-        flags[u] = f;
-        float d;
-        if (!predicted || rec[u]) {
-          d = fresh[u] > kMinPointDisparity ? fresh[u] : fill_at(u);
-        } else if (hole[u] && !(later && later[u])) {  // no predicted point here
-          d = fill_at(u);
-        } else {
-          point_d[u] = predicted_d[u];  // the predicted point stays, where it stands
-          continue;
-        }
-        // A fresh point, at the pixel centre.
-        point_d[u] = d > kMinPointDisparity ? d : nan;  // false for NaN
-        offsets[2 * u] = offsets[2 * u + 1] = 0;
-      }
-    }
-  });
+  FuseInputs fuse;
+  fuse.predicted = predicted;
+  fuse.first_column = first_column;
+  fuse.last_column = last_column;
+  fuse.retry_unmatched_frames = params_.retry_unmatched_frames;
+  fuse.fresh = &res->disparity;
+  fuse.recompute = &res->recompute;
+  fuse.unexpected = &res->unexpected;
+  if (predicted) {
+    fuse.predicted_geometry = &pred.geometry;
+    fuse.carried_flags = &pred.flags;
+    fuse.holes = &pred.holes;
+  }
+  if (!deferred.empty()) fuse.deferred = &deferred;
+  if (!uncertain.empty()) fuse.uncertain = &uncertain;
+  cv::parallel_for_(cv::Range(0, size.height),
+                    [&](const cv::Range& rows) { FuseRows(fuse, rows.start, rows.end, &state_); });
   state_.image = left.clone();
   state_.accumulated = res->accumulated;
   if (predicted && params_.history_reset_px > 0) {

@@ -11,6 +11,8 @@
 #include <stdexcept>
 #include <vector>
 
+#include "common/cpu/hot_loop.h"
+
 namespace epmap::ep {
 
 namespace {
@@ -138,64 +140,76 @@ void ExtendFootprints(const PredictionParams& params, Splat* s) {
   }
 }
 
+// A crack pixel's fill: the mean of its neighbours' points.
+struct CrackFill {
+  int u, v;
+  float d, du, dv;
+  uint8_t flags;
+};
+
+// The fills of the crack pixels of rows [row_begin, row_end) (rows 1 .. H - 2), appended to
+// `out`; `empty_columns` is a work row of W ints.
+EPMAP_HOT_LOOP void FindCrackFills(const Splat& splat, float max_step, int row_begin, int row_end,
+                                   std::vector<int>* empty_columns, std::vector<CrackFill>* out) {
+  const Splat* s = &splat;
+  const int W = s->W;
+  std::vector<int>& empty = *empty_columns;
+  for (int v = row_begin; v < row_end; ++v) {
+    const float* d_mid = s->disparity.ptr<float>(v);
+    // The empty pixels of the row, listed without branches first: they lie scattered, and a
+    // branch per pixel was mispredicted at every one of them.
+    int n_empty = 0;
+    for (int u = 1; u + 1 < W; ++u) {
+      empty[static_cast<size_t>(n_empty)] = u;
+      n_empty += d_mid[u] > 0 ? 0 : 1;
+    }
+    for (int e = 0; e < n_empty; ++e) {
+      const int u = empty[static_cast<size_t>(e)];
+      // The mean of the neighbours' points, as disparity and position (within one surface,
+      // d_max - d_min <= max_step, the same as the mean 3-D point to first order).
+      float sd = 0, su = 0, sv = 0, d_min = 1e30F, d_max = -1e30F;
+      int n = 0, n_measured = 0;
+      uint8_t dynamic = 0;
+      for (int dv = -1; dv <= 1; ++dv) {
+        const float* d_row = s->disparity.ptr<float>(v + dv);
+        const int16_t* o_row = s->offsets.ptr<int16_t>(v + dv);
+        const uint8_t* f_row = s->flags.ptr<uint8_t>(v + dv);
+        for (int du = -1; du <= 1; ++du) {
+          const float d = d_row[u + du];
+          if (!(d > 0)) continue;
+          d_min = std::min(d_min, d);
+          d_max = std::max(d_max, d);
+          sd += d;
+          su += static_cast<float>(du * kOffsetScale + o_row[2 * (u + du)]);
+          sv += static_cast<float>(dv * kOffsetScale + o_row[2 * (u + du) + 1]);
+          ++n;
+          n_measured += (f_row[u + du] & kMeasured) ? 1 : 0;
+          dynamic |= f_row[u + du] & (kDynamic | kUnseen);
+        }
+      }
+      if (n >= 3 && d_max - d_min <= max_step) {
+        const float inv = 1.0F / static_cast<float>(n);
+        constexpr float kToPx = 1.0F / kOffsetScale;
+        out->push_back({u, v, sd * inv, su * inv * kToPx, sv * inv * kToPx,
+                        static_cast<uint8_t>((2 * n_measured > n ? kMeasured : 0) | dynamic)});
+      }
+    }
+  }
+}
+
 void FillCracks(const PredictionParams& params, Splat* s) {
-  struct Fill {
-    int u, v;
-    float d, du, dv;
-    uint8_t flags;
-  };
   const float max_step = static_cast<float>(params.crack_max_step_px);
   const int H = s->H, W = s->W;
   // The fills of each chunk of rows, kept by the chunk's first row (one vector per chunk, not
   // per row: a vector per row grew by reallocation thousands of times a frame).
-  std::vector<std::vector<Fill>> fills(static_cast<size_t>(H));
+  std::vector<std::vector<CrackFill>> fills(static_cast<size_t>(H));
   std::vector<cv::Range> chunks(static_cast<size_t>(H));
   cv::parallel_for_(cv::Range(1, H - 1), [&](const cv::Range& rows) {
     std::vector<int> empty(static_cast<size_t>(W));
-    std::vector<Fill>& out = fills[static_cast<size_t>(rows.start)];
+    std::vector<CrackFill>& out = fills[static_cast<size_t>(rows.start)];
     chunks[static_cast<size_t>(rows.start)] = rows;
     out.reserve(static_cast<size_t>(rows.end - rows.start) * static_cast<size_t>(W) / 8);
-    for (int v = rows.start; v < rows.end; ++v) {
-      const float* d_mid = s->disparity.ptr<float>(v);
-      // The empty pixels of the row, listed without branches first: they lie scattered, and a
-      // branch per pixel was mispredicted at every one of them.
-      int n_empty = 0;
-      for (int u = 1; u + 1 < W; ++u) {
-        empty[static_cast<size_t>(n_empty)] = u;
-        n_empty += d_mid[u] > 0 ? 0 : 1;
-      }
-      for (int e = 0; e < n_empty; ++e) {
-        const int u = empty[static_cast<size_t>(e)];
-        // The mean of the neighbours' points, as disparity and position (within one surface,
-        // d_max - d_min <= max_step, the same as the mean 3-D point to first order).
-        float sd = 0, su = 0, sv = 0, d_min = 1e30F, d_max = -1e30F;
-        int n = 0, n_measured = 0;
-        uint8_t dynamic = 0;
-        for (int dv = -1; dv <= 1; ++dv) {
-          const float* d_row = s->disparity.ptr<float>(v + dv);
-          const int16_t* o_row = s->offsets.ptr<int16_t>(v + dv);
-          const uint8_t* f_row = s->flags.ptr<uint8_t>(v + dv);
-          for (int du = -1; du <= 1; ++du) {
-            const float d = d_row[u + du];
-            if (!(d > 0)) continue;
-            d_min = std::min(d_min, d);
-            d_max = std::max(d_max, d);
-            sd += d;
-            su += static_cast<float>(du * kOffsetScale + o_row[2 * (u + du)]);
-            sv += static_cast<float>(dv * kOffsetScale + o_row[2 * (u + du) + 1]);
-            ++n;
-            n_measured += (f_row[u + du] & kMeasured) ? 1 : 0;
-            dynamic |= f_row[u + du] & (kDynamic | kUnseen);
-          }
-        }
-        if (n >= 3 && d_max - d_min <= max_step) {
-          const float inv = 1.0F / static_cast<float>(n);
-          constexpr float kToPx = 1.0F / kOffsetScale;
-          out.push_back({u, v, sd * inv, su * inv * kToPx, sv * inv * kToPx,
-                         static_cast<uint8_t>((2 * n_measured > n ? kMeasured : 0) | dynamic)});
-        }
-      }
-    }
+    FindCrackFills(*s, max_step, rows.start, rows.end, &empty, &out);
   });
   // Written once every fill is known (a fill must not feed its neighbours'); each writes its
   // own pixel, so the chunks are written in parallel too.
@@ -205,7 +219,7 @@ void FillCracks(const PredictionParams& params, Splat* s) {
   }
   cv::parallel_for_(cv::Range(0, static_cast<int>(firsts.size())), [&](const cv::Range& range) {
     for (int k = range.start; k < range.end; ++k) {
-      for (const Fill& f : fills[firsts[static_cast<size_t>(k)]]) {
+      for (const CrackFill& f : fills[firsts[static_cast<size_t>(k)]]) {
         s->Set(f.u, f.v, f.d, f.du, f.dv, f.flags);
       }
     }
@@ -430,8 +444,9 @@ struct RowProjection {
 // pixel lies in the same rows; the others are returned in `crossers` (another thread owns
 // their rows). Per row, the projection runs first over the whole row into small arrays (a loop
 // the compiler vectorises), then the landings, which depend on each other, one by one.
-void SplatRows(const MapState& previous, const SplatMotion& motion, int row_begin, int row_end,
-               const SplatTarget& target, std::vector<Landing>* crossers) {
+EPMAP_HOT_LOOP void SplatRows(const MapState& previous, const SplatMotion& motion, int row_begin,
+                              int row_end, const SplatTarget& target,
+                              std::vector<Landing>* crossers) {
   const int W = motion.W;
   RowProjection row(W);
   for (int v = row_begin; v < row_end; ++v) {
@@ -452,13 +467,51 @@ void SplatRows(const MapState& previous, const SplatMotion& motion, int row_begi
   }
 }
 
+// Rows [row_begin, row_end) of the full-size outputs from the splat: the geometry, D_- (NaN
+// where the point is not a measurement), the holes; empty pixels get no flags and no offsets.
+// Counts the holes, and the points whose arithmetic broke down (non-finite: made holes).
+EPMAP_HOT_LOOP void WriteOutputRows(int row_begin, int row_end, Splat* s, Prediction* out,
+                                    int* broken_count, int* hole_count) {
+  int broken = 0, holes = 0;  // locals: the byte stores below could alias the counters
+  for (int v = row_begin; v < row_end; ++v) {
+    int16_t* offsets = s->offsets.ptr<int16_t>(v);
+    const float* d_splat = s->disparity.ptr<float>(v);
+    float* disp = out->disparity.ptr<float>(v);
+    float* geo = out->geometry.ptr<float>(v);
+    uint8_t* flags = s->flags.ptr<uint8_t>(v);
+    uint8_t* hole = out->holes.ptr<uint8_t>(v);
+    for (int u = 0; u < s->W; ++u) {
+      // A point that overflowed has d = 0 or a non-finite d: checking d suffices.
+      const float d = d_splat[u];
+      const bool ok = d > 0 && d < std::numeric_limits<float>::infinity();
+      if (ok) {
+        geo[u] = d;
+        disp[u] = (flags[u] & kMeasured) ? d : kNaN;
+        hole[u] = 0;
+      } else {
+        if (d > 0) ++broken;  // a point was there but the arithmetic broke down
+        ++holes;
+        geo[u] = kNaN;
+        disp[u] = kNaN;
+        hole[u] = 255;
+        flags[u] = 0;
+        offsets[2 * u] = offsets[2 * u + 1] = 0;
+      }
+    }
+  }
+  *broken_count += broken;
+  *hole_count += holes;
+}
+
 // Where the points of one row of the comparison grid lie in frame k (Sec. IV-A, backwards):
 // each grid pixel centre (u, v) = (j * step, v) is back-projected at its point's depth
 // z = fb / d, X' = z ray(u, v), moved back, X = R^T (X' - t), and projected, q = pi(X).
 // q = (-1, -1) where there is no point (NaN disparity), the depth is degenerate or q falls
 // outside frame k. __restrict and no branches: the loop vectorises.
-void ProjectGridRowIntoPrevious(const SplatMotion& m, const float* __restrict geometry_row, int v,
-                                int step, int n, float* __restrict qxs, float* __restrict qys) {
+EPMAP_HOT_LOOP void ProjectGridRowIntoPrevious(const SplatMotion& m,
+                                               const float* __restrict geometry_row, int v,
+                                               int step, int n, float* __restrict qxs,
+                                               float* __restrict qys) {
   const float r00 = m.r[0], r01 = m.r[1], r02 = m.r[2];
   const float r10 = m.r[3], r11 = m.r[4], r12 = m.r[5];
   const float r20 = m.r[6], r21 = m.r[7], r22 = m.r[8];
@@ -488,9 +541,9 @@ void ProjectGridRowIntoPrevious(const SplatMotion& m, const float* __restrict ge
 // L^k (full resolution, 8-bit) at q and C^k (comparison grid) at q / step, both bilinear (C^k
 // with its edge replicated), for one grid row; 0 and not valid where q = -1. A non-finite C^k
 // value would spread through the sample: such samples are 0 (no history).
-void SampleGridRow(const cv::Mat& image_k, const cv::Mat& history_k, float inv_step,
-                   const float* qxs, const float* qys, int n, float* lum, float* acc,
-                   uint8_t* valid) {
+EPMAP_HOT_LOOP void SampleGridRow(const cv::Mat& image_k, const cv::Mat& history_k, float inv_step,
+                                  const float* qxs, const float* qys, int n, float* lum, float* acc,
+                                  uint8_t* valid) {
   const int W = image_k.cols, H = image_k.rows;
   const int grid_w_last = history_k.cols - 1, grid_h_last = history_k.rows - 1;
   for (int j = 0; j < n; ++j) {
@@ -650,32 +703,7 @@ Prediction Predict(const MapState& previous, const Eigen::Isometry3d& T_cur_prev
   std::atomic<int> non_finite{0}, hole_count{0};
   cv::parallel_for_(cv::Range(0, H), [&](const cv::Range& rows) {
     int broken = 0, holes = 0;
-    for (int v = rows.start; v < rows.end; ++v) {
-      int16_t* offsets = s.offsets.ptr<int16_t>(v);
-      const float* d_splat = s.disparity.ptr<float>(v);
-      float* disp = out.disparity.ptr<float>(v);
-      float* geo = out.geometry.ptr<float>(v);
-      uint8_t* flags = s.flags.ptr<uint8_t>(v);
-      uint8_t* hole = out.holes.ptr<uint8_t>(v);
-      for (int u = 0; u < W; ++u) {
-        // A point that overflowed has d = 0 or a non-finite d: checking d suffices.
-        const float d = d_splat[u];
-        const bool ok = d > 0 && d < std::numeric_limits<float>::infinity();
-        if (ok) {
-          geo[u] = d;
-          disp[u] = (flags[u] & kMeasured) ? d : kNaN;
-          hole[u] = 0;
-        } else {
-          if (d > 0) ++broken;  // a point was there but the arithmetic broke down
-          ++holes;
-          geo[u] = kNaN;
-          disp[u] = kNaN;
-          hole[u] = 255;
-          flags[u] = 0;
-          offsets[2 * u] = offsets[2 * u + 1] = 0;
-        }
-      }
-    }
+    WriteOutputRows(rows.start, rows.end, &s, &out, &broken, &holes);
     non_finite += broken;
     hole_count += holes;
   });

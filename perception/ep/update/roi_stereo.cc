@@ -7,7 +7,27 @@
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 
+#include "common/cpu/hot_loop.h"
+
 namespace epmap::ep {
+
+namespace {
+
+// SGBM's fixed-point disparities (CV_16S, 1/16 px) as float pixels, NaN where it found no
+// match ("no match" is (min_disparity - 1) * 16).
+EPMAP_HOT_LOOP void FixedToFloat(const cv::Mat& fixed, int min_disparity, cv::Mat* out) {
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const int invalid_below = min_disparity * 16;
+  for (int r = 0; r < fixed.rows; ++r) {
+    const int16_t* __restrict in = fixed.ptr<int16_t>(r);
+    float* __restrict o = out->ptr<float>(r);
+    for (int c = 0; c < fixed.cols; ++c) {
+      o[c] = in[c] < invalid_below ? nan : static_cast<float>(in[c]) * (1.0F / 16.0F);
+    }
+  }
+}
+
+}  // namespace
 
 void RoiStereoParams::Validate() const {
   if (context_px < 0) throw std::invalid_argument("ROI stereo: context_px must be >= 0");
@@ -33,15 +53,7 @@ cv::Mat RoiStereo::Match(const cv::Mat& left, const cv::Mat& right, int min_disp
   cv::Mat fixed;
   matcher_->compute(left, right, fixed);  // CV_16S, disparity * 16
   cv::Mat out(fixed.size(), CV_32FC1);
-  const float nan = std::numeric_limits<float>::quiet_NaN();
-  const int invalid_below = min_disparity * 16;  // "no match" is (min_disparity - 1) * 16
-  for (int r = 0; r < fixed.rows; ++r) {
-    const auto* in = fixed.ptr<int16_t>(r);
-    auto* o = out.ptr<float>(r);
-    for (int c = 0; c < fixed.cols; ++c) {
-      o[c] = in[c] < invalid_below ? nan : static_cast<float>(in[c]) * (1.0F / 16.0F);
-    }
-  }
+  FixedToFloat(fixed, min_disparity, &out);
   return out;
 }
 
