@@ -9,6 +9,7 @@
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "common/cpu/hot_loop.h"
 #include "perception/ep/generator/disparity_fill.h"
@@ -164,54 +165,74 @@ struct FuseInputs {
   const cv::Mat* uncertain = nullptr;  // where the geometry was in question
 };
 
-// Rows [row_begin, row_end) of the next state's points and flags.
+// Rows [row_begin, row_end) of the next state's points and flags, in two passes per row: the
+// flags of every pixel and the predicted points kept (no branches: the compiler vectorises it),
+// then the few pixels that take a fresh point (recomputed, or a hole of the prediction).
 EPMAP_HOT_LOOP void FuseRows(const FuseInputs& in, int row_begin, int row_end, MapState* state) {
   const float nan = std::numeric_limits<float>::quiet_NaN();
   const int width = in.fresh->cols;
   const bool predicted = in.predicted;
   const int first_column = in.first_column, last_column = in.last_column;
+  const int retry_start = in.retry_unmatched_frames;
+  // Stands in for the masks a frame does not have (all clear).
+  const std::vector<uint8_t> clear(static_cast<size_t>(width), 0);
   for (int v = row_begin; v < row_end; ++v) {
-    float* point_d = state->disparity.ptr<float>(v);
+    float* __restrict point_d = state->disparity.ptr<float>(v);
     int16_t* offsets = state->offsets.ptr<int16_t>(v);
-    const float* predicted_d = predicted ? in.predicted_geometry->ptr<float>(v) : nullptr;
-    const float* fresh = in.fresh->ptr<float>(v);
-    // The fill of SGBM's gaps, only where a pixel needs it (on predicted frames few do).
-    RowGap gap;
-    const auto fill_at = [&](int u) { return FilledDisparityAt(fresh, width, u, &gap); };
-    const uint8_t* rec = in.recompute->ptr<uint8_t>(v);
-    const uint8_t* moved = in.unexpected->ptr<uint8_t>(v);
-    const uint8_t* carried = predicted ? in.carried_flags->ptr<uint8_t>(v) : nullptr;
-    const uint8_t* hole = predicted ? in.holes->ptr<uint8_t>(v) : nullptr;
-    const uint8_t* later = in.deferred ? in.deferred->ptr<uint8_t>(v) : nullptr;
-    const uint8_t* in_question = in.uncertain ? in.uncertain->ptr<uint8_t>(v) : nullptr;
-    uint8_t* flags = state->flags.ptr<uint8_t>(v);
+    const float* __restrict fresh = in.fresh->ptr<float>(v);
+    const uint8_t* __restrict rec = in.recompute->ptr<uint8_t>(v);
+    const uint8_t* __restrict moved = in.unexpected->ptr<uint8_t>(v);
+    const uint8_t* __restrict carried =
+        predicted ? in.carried_flags->ptr<uint8_t>(v) : clear.data();
+    const uint8_t* __restrict hole = predicted ? in.holes->ptr<uint8_t>(v) : clear.data();
+    const uint8_t* __restrict later = in.deferred ? in.deferred->ptr<uint8_t>(v) : clear.data();
+    const uint8_t* __restrict in_question =
+        in.uncertain ? in.uncertain->ptr<uint8_t>(v) : clear.data();
+    uint8_t* __restrict flags = state->flags.ptr<uint8_t>(v);
+    if (predicted) {  // the predicted points stay, where they stand (offsets included)
+      std::memcpy(point_d, in.predicted_geometry->ptr<float>(v), sizeof(float) * width);
+    }
     for (int u = 0; u < width; ++u) {
-      const bool measured = fresh[u] > 0;  // false for NaN
-      uint8_t f = measured ? kMeasured : 0;
-      if (moved[u]) f |= kDynamic;
-      if (std::isnan(fresh[u]) && (u < first_column || u > last_column || (later && later[u]) ||
-                                   (carried && (carried[u] & kUnseen) && !rec[u]))) {
-        f |= kUnseen;
-      }
+      const float d = fresh[u];
+      const uint8_t c = carried[u];
+      const bool recomputed = rec[u] != 0;
+      const bool unknown = d != d;  // NaN
+      // Unseen: nothing measured and SGBM never looked (its blind margins, a deferred strip,
+      // an unseen point carried along and not recomputed).
+      const bool unseen = unknown & ((u < first_column) | (u > last_column) | (later[u] != 0) |
+                                     (((c & kUnseen) != 0) & !recomputed));
       // Unmatched where the geometry was in question: tried again, on one frame in
       // retry_every_frames, at most retry_unmatched_frames times; the count waits on the
       // frames between, and ends with a match or any other re-measurement.
-      const int retries = carried ? (carried[u] & kRetryMask) >> kRetryShift : 0;
-      if (carried && in_question && in_question[u] && rec[u] && std::isnan(fresh[u])) {
-        f |= static_cast<uint8_t>((retries > 0 ? retries - 1 : in.retry_unmatched_frames)
-                                  << kRetryShift);
-      } else if (retries > 0 && !rec[u]) {
-        f |= static_cast<uint8_t>(retries << kRetryShift);  // not this frame's turn: kept
+      const int retries = (c & kRetryMask) >> kRetryShift;
+      const bool retry_now = predicted & (in_question[u] != 0) & recomputed & unknown;
+      const int retry =
+          retry_now ? (retries > 0 ? retries - 1 : retry_start) : (recomputed ? 0 : retries);
+      flags[u] = static_cast<uint8_t>((d > 0 ? kMeasured : 0) | (moved[u] ? kDynamic : 0) |
+                                      (unseen ? kUnseen : 0) | (retry << kRetryShift));
+    }
+    // The fill of SGBM's gaps, only where a pixel needs it (on predicted frames few do).
+    RowGap gap;
+    for (int u = 0; u < width; ++u) {
+      if (predicted) {
+        // Most of a row is neither recomputed nor a hole: skipped eight pixels at a time.
+        uint64_t any = 0, word;
+        if (u + 8 <= width) {
+          std::memcpy(&word, rec + u, sizeof(word));
+          any = word;
+          std::memcpy(&word, hole + u, sizeof(word));
+          if ((any | word) == 0) {
+            u += 7;
+            continue;
+          }
+        }
+        if (!rec[u] && !(hole[u] && !later[u])) continue;
       }
-      flags[u] = f;
       float d;
-      if (!predicted || rec[u]) {
-        d = fresh[u] > kMinPointDisparity ? fresh[u] : fill_at(u);
-      } else if (hole[u] && !(later && later[u])) {  // no predicted point here
-        d = fill_at(u);
-      } else {
-        point_d[u] = predicted_d[u];  // the predicted point stays, where it stands
-        continue;
+      if (predicted && !rec[u]) {  // a hole of the prediction (not on a deferred strip)
+        d = FilledDisparityAt(fresh, width, u, &gap);
+      } else {  // recomputed (or the frame computed whole): SGBM's value, or the fill of its gap
+        d = fresh[u] > kMinPointDisparity ? fresh[u] : FilledDisparityAt(fresh, width, u, &gap);
       }
       // A fresh point, at the pixel centre.
       point_d[u] = d > kMinPointDisparity ? d : nan;  // false for NaN
