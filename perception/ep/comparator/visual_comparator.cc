@@ -7,7 +7,71 @@
 #include <stdexcept>
 #include <vector>
 
+#include "common/cpu/hot_loop.h"
+
 namespace epmap::ep {
+
+namespace {
+
+struct CompareRowConstants {
+  float gain, offset, threshold, minus_alpha;
+  float e_new, c_new, e_unexpected, c_unexpected;  // C's weights, without and with a flag
+};
+struct RowSums {
+  double error = 0, attenuated = 0;
+  int valid = 0;
+};
+
+// One row of E, A, C and the pixels above the threshold (see Compare); `att` holds
+// exp(-alpha C_-^2). Two loops the compiler vectorises: the images (no sums in it), then the
+// sums in eight lanes (one running sum made every pixel wait for the previous addition).
+EPMAP_HOT_LOOP RowSums CompareRow(const CompareRowConstants& k, int width,
+                                  const float* __restrict pred, const float* __restrict hist,
+                                  const float* __restrict att, const uint8_t* __restrict ok,
+                                  const uint8_t* __restrict seen, float* __restrict e_row,
+                                  float* __restrict a_row, float* __restrict c_row,
+                                  uint8_t* __restrict up) {
+  for (int u = 0; u < width; ++u) {
+    // Choices as multiplications by 0 or 1 (exact: x * 1 = x, x * 0 + y = y for finite x, y):
+    // GCC does not turn a choice made on a byte into a vector select, and leaves such a loop
+    // scalar.
+    const float valid = ok[u] != 0 ? 1.0F : 0.0F;
+    const float e = valid * std::abs(pred[u] * k.gain + k.offset - static_cast<float>(seen[u]));
+    const float a = e * att[u];
+    const float flag = a > k.threshold ? 1.0F : 0.0F;
+    e_row[u] = e;  // 0 where invalid
+    a_row[u] = a;
+    up[u] = static_cast<uint8_t>(flag * 255.0F);
+    const float c_flagged = e * k.e_unexpected + hist[u] * k.c_unexpected;
+    const float c_plain = e * k.e_new + hist[u] * k.c_new;
+    c_row[u] = valid * (flag * c_flagged + (1.0F - flag) * c_plain);
+  }
+  constexpr int kLanes = 8;
+  float error_lanes[kLanes] = {}, attenuated_lanes[kLanes] = {};
+  int valid_lanes[kLanes] = {};
+  int u = 0;
+  for (; u + kLanes <= width; u += kLanes) {
+    for (int lane = 0; lane < kLanes; ++lane) {
+      error_lanes[lane] += e_row[u + lane];
+      attenuated_lanes[lane] += a_row[u + lane];
+      valid_lanes[lane] += ok[u + lane] != 0 ? 1 : 0;
+    }
+  }
+  RowSums sums;
+  for (; u < width; ++u) {
+    sums.error += e_row[u];
+    sums.attenuated += a_row[u];
+    sums.valid += ok[u] != 0 ? 1 : 0;
+  }
+  for (int lane = 0; lane < kLanes; ++lane) {
+    sums.error += error_lanes[lane];
+    sums.attenuated += attenuated_lanes[lane];
+    sums.valid += valid_lanes[lane];
+  }
+  return sums;
+}
+
+}  // namespace
 
 void ComparatorParams::Validate() const {
   if (!(lambda >= 0)) throw std::invalid_argument("comparator: lambda must be >= 0");
@@ -197,41 +261,22 @@ Comparison Compare(const cv::Mat& predicted, const cv::Mat& valid,
   std::vector<double> row_errors(static_cast<size_t>(size.height)),
       row_attenuated_sums(row_errors.size());
   std::vector<int> row_valid_counts(row_errors.size());
+  const CompareRowConstants k{gain,  offset, threshold,    minus_alpha,
+                              e_new, c_new,  e_unexpected, c_unexpected};
   cv::parallel_for_(cv::Range(0, size.height), [&](const cv::Range& rows) {
     cv::Mat attenuation(1, size.width, CV_32F);
-    float* att = attenuation.ptr<float>(0);
     for (int v = rows.start; v < rows.end; ++v) {
-      const float* pred = predicted.ptr<float>(v);
       const float* hist = predicted_accumulated.ptr<float>(v);
-      const uint8_t* ok = valid.ptr<uint8_t>(v);
-      const uint8_t* seen = actual.ptr<uint8_t>(v);
-      float* e_row = out.error.ptr<float>(v);
-      float* a_row = out.attenuated.ptr<float>(v);
-      float* c_row = out.accumulated.ptr<float>(v);
-      uint8_t* up = above.ptr<uint8_t>(v);
+      float* att = attenuation.ptr<float>(0);
       for (int u = 0; u < size.width; ++u) att[u] = minus_alpha * hist[u] * hist[u];
       cv::exp(attenuation, attenuation);
-      float row_error = 0, row_attenuated = 0;
-      int row_valid = 0;
-      for (int u = 0; u < size.width; ++u) {
-        const bool is_valid = ok[u] != 0;
-        const float e =
-            is_valid ? std::abs(pred[u] * gain + offset - static_cast<float>(seen[u])) : 0;
-        const float a = e * att[u];
-        const bool unexpected = a > threshold;
-        e_row[u] = e;
-        a_row[u] = a;
-        up[u] = unexpected ? 255 : 0;
-        const float c =
-            unexpected ? e * e_unexpected + hist[u] * c_unexpected : e * e_new + hist[u] * c_new;
-        c_row[u] = is_valid ? c : 0.0F;
-        row_error += e;  // 0 where invalid
-        row_attenuated += a;
-        row_valid += is_valid ? 1 : 0;
-      }
-      row_errors[static_cast<size_t>(v)] = row_error;
-      row_attenuated_sums[static_cast<size_t>(v)] = row_attenuated;
-      row_valid_counts[static_cast<size_t>(v)] = row_valid;
+      const RowSums sums =
+          CompareRow(k, size.width, predicted.ptr<float>(v), hist, att, valid.ptr<uint8_t>(v),
+                     actual.ptr<uint8_t>(v), out.error.ptr<float>(v), out.attenuated.ptr<float>(v),
+                     out.accumulated.ptr<float>(v), above.ptr<uint8_t>(v));
+      row_errors[static_cast<size_t>(v)] = sums.error;
+      row_attenuated_sums[static_cast<size_t>(v)] = sums.attenuated;
+      row_valid_counts[static_cast<size_t>(v)] = sums.valid;
     }
   });
   double sum_error = 0, sum_attenuated = 0;
