@@ -335,7 +335,7 @@ struct PassResult {
   std::vector<double> iou_compared, mover_centroid_error_m;
   size_t visible_detected = 0;
   std::vector<double> predict_ms, compare_ms, plan_ms, stereo_ms, fuse_ms;
-  std::vector<double> splat_ms, fill_ms, output_ms, sample_ms;  // parts of predict
+  std::vector<double> splat_ms, fill_ms, output_ms;  // parts of predict (output: with L_-, C_-)
   SequenceScore ep, full;
   // The same over the columns SGBM can match (RoiStereo's matchable columns): there the EP map
   // competes with full-frame SGBM on equal terms; in the left margin only the EP can know
@@ -440,7 +440,6 @@ std::vector<PassResult> RunPasses(const Dataset& d, const Rig& rig,
         r.splat_ms.push_back(e.timings.predict.splat_ms);
         r.fill_ms.push_back(e.timings.predict.fill_ms);
         r.output_ms.push_back(e.timings.predict.output_ms);
-        r.sample_ms.push_back(e.timings.predict.sample_ms);
       }
       r.compare_ms.push_back(e.timings.compare_ms);
       r.plan_ms.push_back(e.timings.plan_ms);
@@ -555,8 +554,7 @@ void Summarise(const PassResult& r, int settle, Json* j) {
   Json predict_parts;  // over predicted frames only
   predict_parts.Num("splat", Median(r.splat_ms))
       .Num("fill", Median(r.fill_ms))
-      .Num("output", Median(r.output_ms))
-      .Num("sample", Median(r.sample_ms));
+      .Num("output", Median(r.output_ms));
   j->Raw("predict_ms_median", predict_parts.str());
   Json c;
   c.Int("predicted", static_cast<long long>(r.counters.predicted))

@@ -692,7 +692,12 @@ Prediction Predict(const MapState& previous, const Eigen::Isometry3d& T_cur_prev
   FillCracks(params, &s);
   if (params.max_hole_fill_px > 0) FillSmallHoles(params, &s);
 
-  // The predicted disparity and the holes, at full resolution.
+  // The predicted disparity and the holes at full resolution and, from them, L_- and C_- on the
+  // comparison grid: one pass over the rows (a grid row needs only its own image row's
+  // geometry, written just before, still in cache).
+  // 2. p(L^k; T^{k+1}, D_-^{k+1}) and p(C^k; ...) (Sec. IV-A) on the comparison grid: each of
+  //    its pixel centres is back-projected at its point's depth into frame k
+  //    (ProjectGridRowIntoPrevious), where L^k and C^k are interpolated (SampleGridRow).
   const Clock::time_point t_output = Clock::now();
   Prediction out;
   // D_- gets a buffer of its own each frame: the caller makes it the frame's map.
@@ -700,22 +705,6 @@ Prediction Predict(const MapState& previous, const Eigen::Isometry3d& T_cur_prev
   mem.geometry.create(H, W, CV_32F);
   out.geometry = mem.geometry;
   out.holes.create(H, W, CV_8U);
-  std::atomic<int> non_finite{0}, hole_count{0};
-  cv::parallel_for_(cv::Range(0, H), [&](const cv::Range& rows) {
-    int broken = 0, holes = 0;
-    WriteOutputRows(rows.start, rows.end, &s, &out, &broken, &holes);
-    non_finite += broken;
-    hole_count += holes;
-  });
-  out.non_finite_rejected = non_finite;
-  out.hole_pixels = hole_count;
-  out.offsets = s.offsets;
-  out.flags = s.flags;
-
-  // 2. p(L^k; T^{k+1}, D_-^{k+1}) and p(C^k; ...) (Sec. IV-A) on the comparison grid: each of
-  //    its pixel centres is back-projected at its point's depth into frame k
-  //    (ProjectGridRowIntoPrevious), where L^k and C^k are interpolated (SampleGridRow).
-  const Clock::time_point t_sample = Clock::now();
   const int step = params.image_step;
   const cv::Size grid = ComparisonGrid(camera, step);
   out.image.create(grid, CV_32F);
@@ -724,7 +713,12 @@ Prediction Predict(const MapState& previous, const Eigen::Isometry3d& T_cur_prev
   const float inv_step = 1.0F / static_cast<float>(step);
   const cv::Mat& image_k = previous.image;
   const cv::Mat& history_k = previous.accumulated;
+  std::atomic<int> non_finite{0}, hole_count{0};
   cv::parallel_for_(cv::Range(0, grid.height), [&](const cv::Range& rows) {
+    int broken = 0, holes = 0;
+    WriteOutputRows(rows.start * step, std::min(rows.end * step, H), &s, &out, &broken, &holes);
+    non_finite += broken;
+    hole_count += holes;
     // Per row, where each grid pixel's point lands in frame k (a loop the compiler vectorises:
     // no branches, plain arrays), then the two bilinear samples there (gathers, one by one).
     std::vector<float> qxs(static_cast<size_t>(grid.width)), qys(qxs.size());
@@ -736,10 +730,13 @@ Prediction Predict(const MapState& previous, const Eigen::Isometry3d& T_cur_prev
                     out.image_valid.ptr<uint8_t>(i));
     }
   });
+  out.non_finite_rejected = non_finite;
+  out.hole_pixels = hole_count;
+  out.offsets = s.offsets;
+  out.flags = s.flags;
   out.timings.splat_ms = MsBetween(t_splat, t_fill);
   out.timings.fill_ms = MsBetween(t_fill, t_output);
-  out.timings.output_ms = MsBetween(t_output, t_sample);
-  out.timings.sample_ms = MsBetween(t_sample, Clock::now());
+  out.timings.output_ms = MsBetween(t_output, Clock::now());
   return out;
 }
 

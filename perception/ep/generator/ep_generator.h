@@ -99,9 +99,10 @@ struct Prediction {
   int non_finite_rejected = 0;  // values that came out non-finite and were made holes
   int hole_pixels = 0;          // pixels of `holes`
   // Where Predict's time went (wall clock, ms): moving and landing the points, the footprint,
-  // crack and hole fills, the full-size outputs, L_- and C_- on the comparison grid.
+  // crack and hole fills, the full-size outputs with L_- and C_- on the comparison grid (one
+  // pass).
   struct Timings {
-    double splat_ms = 0, fill_ms = 0, output_ms = 0, sample_ms = 0;
+    double splat_ms = 0, fill_ms = 0, output_ms = 0;
   } timings;
 };
 
