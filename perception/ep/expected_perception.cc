@@ -150,6 +150,36 @@ void BlindMargins(int first, int last, cv::Mat* image, double value) {
   }
 }
 
+// Whether any pixel of `flags` (CV_8U) has one of `bits`: eight pixels at a time, stopping at
+// the first (a bitwise_and and a countNonZero cost two full passes and an image).
+bool AnyFlag(const cv::Mat& flags, uint8_t bits) {
+  const uint64_t mask = bits * 0x0101010101010101ULL;
+  for (int v = 0; v < flags.rows; ++v) {
+    const uint8_t* row = flags.ptr<uint8_t>(v);
+    int u = 0;
+    for (; u + 8 <= flags.cols; u += 8) {
+      uint64_t word;
+      std::memcpy(&word, row + u, sizeof(word));
+      if (word & mask) return true;
+    }
+    for (; u < flags.cols; ++u) {
+      if (row[u] & bits) return true;
+    }
+  }
+  return false;
+}
+
+// The pixels of `flags` (CV_8U) in columns [first, last] with one of `bits`.
+EPMAP_HOT_LOOP int CountFlag(const cv::Mat& flags, uint8_t bits, int first, int last) {
+  int count = 0;
+  const int begin = std::max(first, 0), end = std::min(last + 1, flags.cols);
+  for (int v = 0; v < flags.rows; ++v) {
+    const uint8_t* row = flags.ptr<uint8_t>(v);
+    for (int u = begin; u < end; ++u) count += (row[u] & bits) != 0 ? 1 : 0;
+  }
+  return count;
+}
+
 // What the fusion of one frame reads (see Process, "The state for the next frame"); the
 // prediction's images are null on frames computed whole, the optional masks null when empty.
 struct FuseInputs {
@@ -380,11 +410,10 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
   const int step = params_.prediction.image_step;
   Prediction pred;
   Comparison cmp;
-  cv::Mat flagged;    // the comparator's unexpected regions, at full resolution
-  cv::Mat deferred;   // thin border strips left for a later frame
-  cv::Mat uncertain;  // recomputed regions whose disparity may be anything
-  cv::Mat dynamic;    // nonzero where the prediction comes from points that moved on their own
-  bool any_dynamic = false;
+  cv::Mat flagged;           // the comparator's unexpected regions, at full resolution
+  cv::Mat deferred;          // thin border strips left for a later frame
+  cv::Mat uncertain;         // recomputed regions whose disparity may be anything
+  bool any_dynamic = false;  // some of the prediction comes from points that moved on their own
   bool from_earlier_view = false;
   if (has_state_) {
     const double dt_s = std::clamp(static_cast<double>(stamp_ns - last_stamp_ns_) * 1e-9,
@@ -410,8 +439,7 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
       // Where the prediction comes from points that moved on their own last frame (planned
       // below too): the comparator keeps following what it found moving; and where it comes
       // from a guessed depth: never grown over.
-      cv::bitwise_and(pred.flags, cv::Scalar(kDynamic), dynamic);
-      any_dynamic = cv::countNonZero(dynamic) > 0;
+      any_dynamic = AnyFlag(pred.flags, kDynamic);
       const cv::Mat grid_flags = Decimate(pred.flags, step);
       PredictionHints hints;
       if (any_dynamic) cv::bitwise_and(grid_flags, cv::Scalar(kDynamic), hints.moved_before);
@@ -445,7 +473,8 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
     } else {
       cv::Mat questioned;
       if (any_dynamic) {
-        cv::compare(dynamic, 0, questioned, cv::CMP_GT);  // 255 where dynamic
+        cv::bitwise_and(pred.flags, cv::Scalar(kDynamic), questioned);
+        cv::compare(questioned, 0, questioned, cv::CMP_GT);  // 255 where dynamic
         if (any_flagged) questioned |= flagged;
       } else {
         questioned = flagged;
@@ -462,9 +491,9 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
     // frames that are a retry's turn.
     if (params_.retry_unmatched_frames > 0 &&
         frame_index_ % static_cast<uint64_t>(params_.retry_every_frames) == 0) {
-      cv::Mat retry;
-      cv::bitwise_and(pred.flags, cv::Scalar(kRetryMask), retry);
-      if (cv::countNonZero(retry) > 0) {
+      if (AnyFlag(pred.flags, kRetryMask)) {
+        cv::Mat retry;
+        cv::bitwise_and(pred.flags, cv::Scalar(kRetryMask), retry);
         cv::compare(retry, 0, retry, cv::CMP_GT);
         uncertain |= retry;
       }
@@ -509,11 +538,11 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
     // image (its box reaches back over the whole search range: a thinner strip would pay that
     // padding for little); until then it stays unknown.
     {
-      cv::Mat emerged;
-      cv::bitwise_and(pred.flags, cv::Scalar(kUnseen), emerged);
-      BlindMargins(first_column, last_column, &emerged, 0);
-      const int count = cv::countNonZero(emerged);
+      const int count = CountFlag(pred.flags, kUnseen, first_column, last_column);
       if (count > 0 && count >= std::max(params_.border_batch_px, 1) * size.height) {
+        cv::Mat emerged;
+        cv::bitwise_and(pred.flags, cv::Scalar(kUnseen), emerged);
+        BlindMargins(first_column, last_column, &emerged, 0);
         recompute.setTo(255, emerged);
       }
     }
