@@ -480,8 +480,20 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
         questioned = flagged;
       }
       if (params_.recompute_margin_px > 0) {
-        const int k = 2 * params_.recompute_margin_px + 1;
-        cv::dilate(questioned, uncertain, cv::getStructuringElement(cv::MORPH_RECT, {k, k}));
+        // Dilated only inside the box of what is in question, grown by the margin (all else
+        // stays 0): usually a small part of the image.
+        const int margin = params_.recompute_margin_px, k = 2 * margin + 1;
+        const cv::Rect box = cv::boundingRect(questioned);
+        const cv::Rect roi = cv::Rect(box.x - margin, box.y - margin, box.width + 2 * margin,
+                                      box.height + 2 * margin) &
+                             cv::Rect(0, 0, size.width, size.height);
+        uncertain = cv::Mat::zeros(size, CV_8U);
+        if (!box.empty()) {
+          cv::Mat part = uncertain(roi);
+          // BORDER_ISOLATED: the part is dilated as an image of its own (outside it all is 0).
+          cv::dilate(questioned(roi), part, cv::getStructuringElement(cv::MORPH_RECT, {k, k}),
+                     cv::Point(-1, -1), 1, cv::BORDER_CONSTANT | cv::BORDER_ISOLATED);
+        }
       } else {
         uncertain = questioned.clone();
       }
