@@ -246,12 +246,11 @@ EPMAP_HOT_LOOP void FuseRows(const FuseInputs& in, int row_begin, int row_end, M
     for (int u = 0; u < width; ++u) {
       if (predicted) {
         // Most of a row is neither recomputed nor a hole: skipped eight pixels at a time.
-        uint64_t any = 0, word;
         if (u + 8 <= width) {
-          std::memcpy(&word, rec + u, sizeof(word));
-          any = word;
-          std::memcpy(&word, hole + u, sizeof(word));
-          if ((any | word) == 0) {
+          uint64_t rec_word, hole_word;
+          std::memcpy(&rec_word, rec + u, sizeof(rec_word));
+          std::memcpy(&hole_word, hole + u, sizeof(hole_word));
+          if ((rec_word | hole_word) == 0) {
             u += 7;
             continue;
           }
