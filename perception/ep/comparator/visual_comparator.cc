@@ -14,7 +14,7 @@ namespace epmap::ep {
 namespace {
 
 struct CompareRowConstants {
-  float gain, offset, threshold, minus_alpha;
+  float gain, offset, threshold;
   float e_new, c_new, e_unexpected, c_unexpected;  // C's weights, without and with a flag
 };
 struct RowSums {
@@ -23,8 +23,9 @@ struct RowSums {
 };
 
 // One row of E, A, C and the pixels above the threshold (see Compare); `att` holds
-// exp(-alpha C_-^2). Two loops the compiler vectorises: the images (no sums in it), then the
-// sums in eight lanes (one running sum made every pixel wait for the previous addition).
+// exp(-alpha C_-^2). The images in a loop the compiler vectorises (no sums in it), then the
+// sums in eight independent lanes (one running sum made every pixel wait for the previous
+// addition).
 EPMAP_HOT_LOOP RowSums CompareRow(const CompareRowConstants& k, int width,
                                   const float* __restrict pred, const float* __restrict hist,
                                   const float* __restrict att, const uint8_t* __restrict ok,
@@ -261,8 +262,7 @@ Comparison Compare(const cv::Mat& predicted, const cv::Mat& valid,
   std::vector<double> row_errors(static_cast<size_t>(size.height)),
       row_attenuated_sums(row_errors.size());
   std::vector<int> row_valid_counts(row_errors.size());
-  const CompareRowConstants k{gain,  offset, threshold,    minus_alpha,
-                              e_new, c_new,  e_unexpected, c_unexpected};
+  const CompareRowConstants k{gain, offset, threshold, e_new, c_new, e_unexpected, c_unexpected};
   cv::parallel_for_(cv::Range(0, size.height), [&](const cv::Range& rows) {
     cv::Mat attenuation(1, size.width, CV_32F);
     for (int v = rows.start; v < rows.end; ++v) {
