@@ -44,6 +44,21 @@ std::unique_ptr<v1::CalibrationService::Stub> Stub(const ClientOptions& o) {
   return v1::CalibrationService::NewStub(o.Channel());
 }
 
+// One unary call of the calibration service, under the options' deadline. A failed call is
+// reported (and the exit code set): false.
+template <typename Request, typename Response>
+bool Call(ClientOptions& o,
+          grpc::Status (v1::CalibrationService::Stub::*method)(grpc::ClientContext*, const Request&,
+                                                               Response*),
+          const Request& request, Response* response) {
+  const auto stub = Stub(o);
+  const auto context = o.Context();
+  const grpc::Status status = ((*stub).*method)(context.get(), request, response);
+  if (status.ok()) return true;
+  o.exit_code = o.Fail(status);
+  return false;
+}
+
 const char* KindName(v1::JobKind kind) {
   switch (kind) {
     case v1::EYE_HAND:
@@ -303,12 +318,7 @@ void Setup(CLI::App& app, ClientOptions& o) {
       v1::ListSamplesRequest request;
       request.set_set(*set);
       v1::ListSamplesResponse response;
-      const auto context = o.Context();
-      const grpc::Status status = Stub(o)->ListSamples(context.get(), request, &response);
-      if (!status.ok()) {
-        o.exit_code = o.Fail(status);
-        return;
-      }
+      if (!Call(o, &v1::CalibrationService::Stub::ListSamples, request, &response)) return;
       if (*json) {
         std::cout << Json(response) << "\n";
         return;
@@ -329,12 +339,7 @@ void Setup(CLI::App& app, ClientOptions& o) {
       v1::DeleteSamplesRequest request;
       request.set_set(*set);
       v1::DeleteSamplesResponse response;
-      const auto context = o.Context();
-      const grpc::Status status = Stub(o)->DeleteSamples(context.get(), request, &response);
-      if (!status.ok()) {
-        o.exit_code = o.Fail(status);
-        return;
-      }
+      if (!Call(o, &v1::CalibrationService::Stub::DeleteSamples, request, &response)) return;
       std::printf("deleted %llu samples\n", static_cast<unsigned long long>(response.deleted()));
     });
   }
@@ -444,12 +449,7 @@ void Setup(CLI::App& app, ClientOptions& o) {
       v1::ListJobsRequest request;
       request.set_limit(*limit);
       v1::ListJobsResponse response;
-      const auto context = o.Context();
-      const grpc::Status status = Stub(o)->ListJobs(context.get(), request, &response);
-      if (!status.ok()) {
-        o.exit_code = o.Fail(status);
-        return;
-      }
+      if (!Call(o, &v1::CalibrationService::Stub::ListJobs, request, &response)) return;
       if (*json) {
         std::cout << Json(response) << "\n";
         return;
@@ -468,12 +468,7 @@ void Setup(CLI::App& app, ClientOptions& o) {
       v1::GetJobRequest request;
       request.set_id(*id);
       v1::Job job;
-      const auto context = o.Context();
-      const grpc::Status status = Stub(o)->GetJob(context.get(), request, &job);
-      if (!status.ok()) {
-        o.exit_code = o.Fail(status);
-        return;
-      }
+      if (!Call(o, &v1::CalibrationService::Stub::GetJob, request, &job)) return;
       std::cout << (*json ? Json(job) : Describe(job)) << "\n";
     });
   }
@@ -493,12 +488,7 @@ void Setup(CLI::App& app, ClientOptions& o) {
       v1::CancelJobRequest request;
       request.set_id(*id);
       v1::Job job;
-      const auto context = o.Context();
-      const grpc::Status status = Stub(o)->CancelJob(context.get(), request, &job);
-      if (!status.ok()) {
-        o.exit_code = o.Fail(status);
-        return;
-      }
+      if (!Call(o, &v1::CalibrationService::Stub::CancelJob, request, &job)) return;
       std::cout << Describe(job) << "\n";
     });
   }
@@ -513,12 +503,7 @@ void Setup(CLI::App& app, ClientOptions& o) {
       v1::ListModelsRequest request;
       request.set_kind(ParseKind(*kind));
       v1::ListModelsResponse response;
-      const auto context = o.Context();
-      const grpc::Status status = Stub(o)->ListModels(context.get(), request, &response);
-      if (!status.ok()) {
-        o.exit_code = o.Fail(status);
-        return;
-      }
+      if (!Call(o, &v1::CalibrationService::Stub::ListModels, request, &response)) return;
       if (*json) {
         std::cout << Json(response) << "\n";
         return;
@@ -535,12 +520,7 @@ void Setup(CLI::App& app, ClientOptions& o) {
       v1::ActivateModelRequest request;
       request.set_id(*id);
       v1::Model model;
-      const auto context = o.Context();
-      const grpc::Status status = Stub(o)->ActivateModel(context.get(), request, &model);
-      if (!status.ok()) {
-        o.exit_code = o.Fail(status);
-        return;
-      }
+      if (!Call(o, &v1::CalibrationService::Stub::ActivateModel, request, &model)) return;
       std::printf("active %s model: %s\n", KindName(model.kind()), model.id().c_str());
     });
   }
@@ -554,12 +534,7 @@ void Setup(CLI::App& app, ClientOptions& o) {
       v1::RollbackModelRequest request;
       request.set_kind(ParseKind(*kind));
       v1::Model model;
-      const auto context = o.Context();
-      const grpc::Status status = Stub(o)->RollbackModel(context.get(), request, &model);
-      if (!status.ok()) {
-        o.exit_code = o.Fail(status);
-        return;
-      }
+      if (!Call(o, &v1::CalibrationService::Stub::RollbackModel, request, &model)) return;
       if (model.id().empty()) {
         std::printf("rolled back: no %s model is active now\n", kind->c_str());
       } else {
