@@ -20,7 +20,9 @@
 #include <vector>
 
 #include "bench/epmap_bench/command_registry.h"
+#include "bench/epmap_bench/summary.h"
 #include "common/dataset/dataset.h"
+#include "perception/calibration/dataset_intrinsics.h"
 #include "perception/calibration/eye_hand_calibration.h"
 #include "perception/calibration/stereo_self_calibration.h"
 #include "perception/kinematics/urdf_chain.h"
@@ -29,32 +31,7 @@ namespace {
 
 using namespace epmap::calibration;
 using Clock = std::chrono::steady_clock;
-
-double Ms(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
-
-double Median(std::vector<double> v) {
-  if (v.empty()) return std::nan("");
-  std::sort(v.begin(), v.end());
-  return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
-}
-
-std::string Num(double v, int digits = 6) {
-  if (!std::isfinite(v)) return "null";
-  char buf[48];
-  std::snprintf(buf, sizeof buf, "%.*g", digits, v);
-  return buf;
-}
-
-std::string Quote(const std::string& s) {
-  std::string out = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\') out.push_back('\\');
-    out.push_back(c);
-  }
-  return out + "\"";
-}
+using namespace epmap::bench;
 
 // ---------------------------------------------------------------------------------------------
 // Eye-hand
@@ -65,11 +42,11 @@ struct Fitted {
 };
 
 std::string ErrorsJson(const EyeHandCalibrationResult& r) {
-  return "{\"train_mean_m\":" + Num(r.errors.train.mean_m) +
-         ",\"train_rmse_m\":" + Num(r.errors.train.rmse_m) +
-         ",\"test_mean_m\":" + Num(r.errors.test.mean_m) +
-         ",\"test_rmse_m\":" + Num(r.errors.test.rmse_m) +
-         ",\"test_median_m\":" + Num(r.errors.test.median_m) +
+  return "{\"train_mean_m\":" + JsonNumber(r.errors.train.mean_m, 6) +
+         ",\"train_rmse_m\":" + JsonNumber(r.errors.train.rmse_m, 6) +
+         ",\"test_mean_m\":" + JsonNumber(r.errors.test.mean_m, 6) +
+         ",\"test_rmse_m\":" + JsonNumber(r.errors.test.rmse_m, 6) +
+         ",\"test_median_m\":" + JsonNumber(r.errors.test.median_m, 6) +
          ",\"outliers_rejected\":" + std::to_string(r.errors.outliers_rejected) +
          ",\"experts\":" + std::to_string(r.errors.experts) + "}";
 }
@@ -90,8 +67,8 @@ void EyeHandSplit(const std::vector<EyeHandSample>& all,
                      ",\"test_paths\":" + std::to_string(test_paths.size()) +
                      ",\"train_samples\":" + std::to_string(train.size()) +
                      ",\"test_samples\":" + std::to_string(test.size());
-  line += ",\"initial_mean_error_m\":" + Num(EvaluateUncalibrated(test).mean_m);
-  line += ",\"initial_mean_error_all_m\":" + Num(EvaluateUncalibrated(all).mean_m);
+  line += ",\"initial_mean_error_m\":" + JsonNumber(EvaluateUncalibrated(test).mean_m, 6);
+  line += ",\"initial_mean_error_all_m\":" + JsonNumber(EvaluateUncalibrated(all).mean_m, 6);
   for (const auto& [name, params] : std::vector<std::pair<std::string, EyeHandCalibrationParams>>{
            {"se3", Method(EyeHandMethod::kSe3)},
            {"se3_scale", Method(EyeHandMethod::kSe3Scale)},
@@ -101,10 +78,10 @@ void EyeHandSplit(const std::vector<EyeHandSample>& all,
       const auto t0 = Clock::now();
       const auto r = CalibrateEyeHand(train, test, params);
       std::string errors = ErrorsJson(r);
-      errors.insert(errors.size() - 1, ",\"fit_ms\":" + Num(Ms(t0), 4));
+      errors.insert(errors.size() - 1, ",\"fit_ms\":" + JsonNumber(MsSince(t0), 4));
       line += ",\"" + name + "\":" + errors;
     } catch (const CalibrationError& e) {
-      line += ",\"" + name + "\":{\"error\":" + Quote(e.what()) + "}";
+      line += ",\"" + name + "\":{\"error\":" + JsonQuote(e.what()) + "}";
     }
   }
   std::printf("%s}\n", line.c_str());
@@ -134,12 +111,13 @@ void EyeHandOnePath(const std::vector<EyeHandSample>& all) {
         reason = e.what();
       }
     }
-    line += ",\"" + name + "\":{\"train_mean_m_median\":" + Num(Median(train)) +
-            ",\"test_mean_m_median\":" + Num(Median(test)) + ",\"test_mean_m_worst\":" +
-            Num(test.empty() ? std::nan("") : *std::max_element(test.begin(), test.end())) +
-            ",\"initial_mean_m_median\":" + Num(Median(initial)) +
-            ",\"failed\":" + std::to_string(failed) +
-            (failed ? ",\"failure\":" + Quote(reason) : std::string()) + "}";
+    line +=
+        ",\"" + name + "\":{\"train_mean_m_median\":" + JsonNumber(Median(train), 6) +
+        ",\"test_mean_m_median\":" + JsonNumber(Median(test), 6) + ",\"test_mean_m_worst\":" +
+        JsonNumber(test.empty() ? std::nan("") : *std::max_element(test.begin(), test.end()), 6) +
+        ",\"initial_mean_m_median\":" + JsonNumber(Median(initial), 6) +
+        ",\"failed\":" + std::to_string(failed) +
+        (failed ? ",\"failure\":" + JsonQuote(reason) : std::string()) + "}";
   }
   std::printf("%s}\n", line.c_str());
 }
@@ -173,9 +151,9 @@ void EyeHandLearningCurve(const std::vector<EyeHandSample>& all,
       }
     }
     line += std::string(first ? "" : ",") + "{\"n\":" + std::to_string(n) +
-            ",\"se3_test_mean_m\":" + Num(Median(se3)) +
+            ",\"se3_test_mean_m\":" + JsonNumber(Median(se3), 6) +
             ",\"se3_fits\":" + std::to_string(se3.size()) +
-            ",\"mixture4_test_mean_m\":" + Num(Median(mix)) +
+            ",\"mixture4_test_mean_m\":" + JsonNumber(Median(mix), 6) +
             ",\"mixture4_fits\":" + std::to_string(mix.size()) + "}";
     first = false;
   }
@@ -208,16 +186,16 @@ void EyeHandSolver(const std::vector<EyeHandSample>& all) {
   for (int r = 0; r < runs; ++r) {
     auto t0 = Clock::now();
     const auto f1 = FitSe3(a, b, defaults);
-    t_default.push_back(Ms(t0));
+    t_default.push_back(MsSince(t0));
     t0 = Clock::now();
     const auto f2 = FitSe3(a, b, plain);
-    t_plain.push_back(Ms(t0));
+    t_plain.push_back(MsSince(t0));
     t0 = Clock::now();
     const auto f3 = FitSe3(a, b, from_identity);
-    t_identity.push_back(Ms(t0));
+    t_identity.push_back(MsSince(t0));
     t0 = Clock::now();
     const Eigen::Matrix4d h = Eigen::umeyama(a, b, false);
-    t_umeyama.push_back(Ms(t0));
+    t_umeyama.push_back(MsSince(t0));
     if (!h.allFinite() || f1.stats.samples + f2.stats.samples + f3.stats.samples == 0) return;
   }
   std::printf(
@@ -227,11 +205,12 @@ void EyeHandSolver(const std::vector<EyeHandSample>& all) {
       "\"fit_ms_median\":{\"se3_default\":%s,\"se3_no_outlier_rule\":%s,"
       "\"se3_from_identity_no_outlier_rule\":%s,\"umeyama_baseline\":%s},"
       "\"ratio_default_to_umeyama\":%s,\"runs\":%d}\n",
-      pts.size(), Num(rms(fit_id.transform), 3).c_str(), Num(rms(fit_um.transform), 3).c_str(),
-      fit_id.stats.evaluations, fit_um.stats.evaluations, Num(Median(t_default), 4).c_str(),
-      Num(Median(t_plain), 4).c_str(), Num(Median(t_identity), 4).c_str(),
-      Num(Median(t_umeyama), 4).c_str(), Num(Median(t_default) / Median(t_umeyama), 4).c_str(),
-      runs);
+      pts.size(), JsonNumber(rms(fit_id.transform), 3).c_str(),
+      JsonNumber(rms(fit_um.transform), 3).c_str(), fit_id.stats.evaluations,
+      fit_um.stats.evaluations, JsonNumber(Median(t_default), 4).c_str(),
+      JsonNumber(Median(t_plain), 4).c_str(), JsonNumber(Median(t_identity), 4).c_str(),
+      JsonNumber(Median(t_umeyama), 4).c_str(),
+      JsonNumber(Median(t_default) / Median(t_umeyama), 4).c_str(), runs);
 }
 
 int RunEyeHand(const std::string& csv, uint64_t seed, int test_path_count) {
@@ -282,40 +261,6 @@ std::vector<GtExtrinsics> ReadGtExtrinsics(const std::filesystem::path& csv) {
   return out;
 }
 
-CameraIntrinsics Intrinsics(const epmap::dataset::CameraSensor& s) {
-  CameraIntrinsics c;
-  c.width = s.width;
-  c.height = s.height;
-  c.k << s.fu, 0, s.cu, 0, s.fv, s.cv, 0, 0, 1;
-  c.distortion = s.distortion;
-  c.distortion_model = s.distortion_model;
-  return c;
-}
-
-// Median |dy| of SIFT matches on a rectified pair, after dropping gross mismatches (|dy| > 20 px
-// cannot be one point on two rectified rows of any plausible calibration).
-double VerticalOffset(const CameraIntrinsics& c0, const CameraIntrinsics& c1,
-                      const Eigen::Isometry3d& T_cam0_cam1, const cv::Mat& left,
-                      const cv::Mat& right) {
-  cv::Mat rl, rr;
-  MakeRectifier(c0, c1, T_cam0_cam1).Rectify(left, right, rl, rr);
-  std::vector<Eigen::Vector2d> pl, pr;
-  MatchSift(rl, rr, 4000, 0.7, true, &pl, &pr);
-  std::vector<double> dy;
-  for (size_t i = 0; i < pl.size(); ++i) {
-    const double d = std::abs(pl[i].y() - pr[i].y());
-    if (d < 20) dy.push_back(d);
-  }
-  return Median(dy);
-}
-
-std::string Stats(const std::vector<double>& v) {
-  if (v.empty()) return "null";
-  return "{\"median\":" + Num(Median(v), 4) +
-         ",\"max\":" + Num(*std::max_element(v.begin(), v.end()), 4) +
-         ",\"n\":" + std::to_string(v.size()) + "}";
-}
-
 // Kinematic mode (fixed_rig_error_deg < 0): prior from joints0 through kinematics.urdf, truth
 // from gt_extrinsics0. Fixed-rig mode (a calibrated rig such as EuRoC): truth from the two
 // sensor.yaml T_BS, prior = truth with its rotation off by fixed_rig_error_deg.
@@ -337,7 +282,7 @@ int RunVergence(const std::string& dir, int max_frames, int group, double direct
       truth[g.stamp_ns] = g.T_cam0_cam1;
     }
   }
-  const CameraIntrinsics c0 = Intrinsics(d.cam0), c1 = Intrinsics(d.cam1);
+  const CameraIntrinsics c0 = IntrinsicsOf(d.cam0), c1 = IntrinsicsOf(d.cam1);
   const StereoSelfCalibrationParams params;  // the paper's procedure: data only
   StereoSelfCalibrationParams with_prior;    // plus the optional baseline-direction prior
   with_prior.baseline_direction_prior_sigma_deg = direction_prior_deg;
@@ -380,12 +325,12 @@ int RunVergence(const std::string& dir, int max_frames, int group, double direct
     try {
       const auto t0 = Clock::now();
       const auto r = SelfCalibrateStereo(c0, c1, {v}, params);
-      ms.push_back(Ms(t0));
+      ms.push_back(MsSince(t0));
       rot.push_back(RotationAngleDeg(r.model.T_cam0_cam1.linear(), t.linear()));
       dir_err.push_back(DirectionAngleDeg(r.model.T_cam0_cam1.translation(), t.translation()));
-      vo_rec.push_back(VerticalOffset(c0, c1, r.model.T_cam0_cam1, v.left, v.right));
-      vo_prior.push_back(VerticalOffset(c0, c1, v.T_cam0_cam1_prior, v.left, v.right));
-      vo_true.push_back(VerticalOffset(c0, c1, t, v.left, v.right));
+      vo_rec.push_back(MedianRowOffset(c0, c1, r.model.T_cam0_cam1, v.left, v.right));
+      vo_prior.push_back(MedianRowOffset(c0, c1, v.T_cam0_cam1_prior, v.left, v.right));
+      vo_true.push_back(MedianRowOffset(c0, c1, t, v.left, v.right));
       if (verbose) {
         std::fprintf(stderr,
                      "frame %d: keypoints %d/%d putative %d gated %d inliers %d homography %d "
@@ -436,7 +381,7 @@ int RunVergence(const std::string& dir, int max_frames, int group, double direct
   const auto failures_json = [](const std::map<std::string, int>& m) {
     std::string s = "{";
     for (const auto& [k, v] : m)
-      s += (s.size() > 1 ? "," : "") + Quote(k) + ":" + std::to_string(v);
+      s += (s.size() > 1 ? "," : "") + JsonQuote(k) + ":" + std::to_string(v);
     return s + "}";
   };
   std::printf(
@@ -452,12 +397,14 @@ int RunVergence(const std::string& dir, int max_frames, int group, double direct
       "\"prior_spread_within_group_deg\":%s,"
       "\"rotation_error_deg\":%s,\"baseline_direction_error_deg\":%s}}\n",
       fixed_rig ? "fixed-rig" : "vergence", n, tried, rot.size(), failures_json(failures).c_str(),
-      Stats(rot).c_str(), Stats(dir_err).c_str(), Stats(prior_rot).c_str(),
-      Stats(prior_dir).c_str(), Stats(vo_rec).c_str(), Stats(vo_prior).c_str(),
-      Stats(vo_true).c_str(), Num(Median(ms), 4).c_str(), Num(direction_prior_deg).c_str(),
-      failures_json(wp_failures).c_str(), Stats(wp_rot).c_str(), Stats(wp_dir).c_str(), group,
-      multi_tried, failures_json(multi_failures).c_str(), Stats(group_spread).c_str(),
-      Stats(multi_rot).c_str(), Stats(multi_dir).c_str());
+      JsonMedianMax(rot).c_str(), JsonMedianMax(dir_err).c_str(), JsonMedianMax(prior_rot).c_str(),
+      JsonMedianMax(prior_dir).c_str(), JsonMedianMax(vo_rec).c_str(),
+      JsonMedianMax(vo_prior).c_str(), JsonMedianMax(vo_true).c_str(),
+      JsonNumber(Median(ms), 4).c_str(), JsonNumber(direction_prior_deg, 6).c_str(),
+      failures_json(wp_failures).c_str(), JsonMedianMax(wp_rot).c_str(),
+      JsonMedianMax(wp_dir).c_str(), group, multi_tried, failures_json(multi_failures).c_str(),
+      JsonMedianMax(group_spread).c_str(), JsonMedianMax(multi_rot).c_str(),
+      JsonMedianMax(multi_dir).c_str());
   return 0;
 }
 

@@ -31,8 +31,10 @@
 #include <vector>
 
 #include "bench/epmap_bench/command_registry.h"
+#include "bench/epmap_bench/summary.h"
 #include "clients/sim/scenario.h"
 #include "common/process/child_process.h"
+#include "perception/calibration/dataset_intrinsics.h"
 #include "perception/calibration/eye_hand_calibration.h"
 #include "perception/calibration/stereo_self_calibration.h"
 #include "services/mapping/calibration/stereo_correction.h"
@@ -43,41 +45,7 @@ namespace fs = std::filesystem;
 namespace v1 = epmap::v1;
 using namespace epmap::calibration;
 using Clock = std::chrono::steady_clock;
-
-double Ms(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
-
-double Median(std::vector<double> v) {
-  if (v.empty()) return std::nan("");
-  std::sort(v.begin(), v.end());
-  return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
-}
-
-double Max(const std::vector<double>& v) {
-  return v.empty() ? std::nan("") : *std::max_element(v.begin(), v.end());
-}
-
-std::string Num(double v, int digits = 5) {
-  if (!std::isfinite(v)) return "null";
-  char buf[48];
-  std::snprintf(buf, sizeof buf, "%.*g", digits, v);
-  return buf;
-}
-
-std::string Stats(const std::vector<double>& v) {
-  return "{\"median\":" + Num(Median(v), 4) + ",\"max\":" + Num(Max(v), 4) +
-         ",\"n\":" + std::to_string(v.size()) + "}";
-}
-
-std::string Quote(const std::string& s) {
-  std::string out = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\') out.push_back('\\');
-    out.push_back(c);
-  }
-  return out + "\"";
-}
+using namespace epmap::bench;
 
 std::unique_ptr<grpc::ClientContext> Deadline(int seconds = 30) {
   auto c = std::make_unique<grpc::ClientContext>();
@@ -136,7 +104,7 @@ class Service {
         break;
       }
     }
-    *elapsed_ms = Ms(t0);
+    *elapsed_ms = MsSince(t0);
     context.TryCancel();
     reader->Finish();
     return job;
@@ -176,7 +144,7 @@ int RunEyeHand(const std::string& csv, int runs, const fs::path& work, uint32_t 
   const auto t_add = Clock::now();
   v1::AddSamplesResponse added;
   const auto status = service.stub().AddSamples(Deadline().get(), add, &added);
-  const double add_ms = Ms(t_add);
+  const double add_ms = MsSince(t_add);
   if (!status.ok()) throw std::runtime_error("AddSamples: " + status.error_message());
 
   v1::StartJobRequest start;
@@ -208,7 +176,7 @@ int RunEyeHand(const std::string& csv, int runs, const fs::path& work, uint32_t 
   for (int r = 0; r < runs; ++r) {
     const auto t0 = Clock::now();
     local = CalibrateEyeHand(split.train, split.test, params);
-    in_process.push_back(Ms(t0));
+    in_process.push_back(MsSince(t0));
   }
   const auto& e = job.errors();
   std::printf(
@@ -220,41 +188,18 @@ int RunEyeHand(const std::string& csv, int runs, const fs::path& work, uint32_t 
       "\"holdout_mean_m\":%s,\"holdout_count\":%u},"
       "\"in_process\":{\"holdout_mean_m\":%s,\"holdout_count\":%zu},"
       "\"same_result\":%s}\n",
-      samples.size(), runs, Num(add_ms, 4).c_str(), Stats(end_to_end).c_str(),
-      Num(Median(server_ms), 4).c_str(), Num(Median(queued_ms), 4).c_str(),
-      Stats(in_process).c_str(), Num(Median(end_to_end) / Median(in_process), 3).c_str(),
-      e.experts(), Num(e.initial_mean_m()).c_str(), Num(e.train_mean_m()).c_str(),
-      Num(e.holdout_mean_m()).c_str(), e.holdout_count(), Num(local.errors.test.mean_m).c_str(),
-      local.errors.test.count,
+      samples.size(), runs, JsonNumber(add_ms, 4).c_str(), JsonMedianMax(end_to_end).c_str(),
+      JsonNumber(Median(server_ms), 4).c_str(), JsonNumber(Median(queued_ms), 4).c_str(),
+      JsonMedianMax(in_process).c_str(),
+      JsonNumber(Median(end_to_end) / Median(in_process), 3).c_str(), e.experts(),
+      JsonNumber(e.initial_mean_m(), 5).c_str(), JsonNumber(e.train_mean_m(), 5).c_str(),
+      JsonNumber(e.holdout_mean_m(), 5).c_str(), e.holdout_count(),
+      JsonNumber(local.errors.test.mean_m, 5).c_str(), local.errors.test.count,
       std::abs(e.holdout_mean_m() - local.errors.test.mean_m) < 1e-12 ? "true" : "false");
   return 0;
 }
 
 // ---------------------------------------------------------------------------------------------
-
-CameraIntrinsics Intrinsics(const epmap::dataset::CameraSensor& s) {
-  CameraIntrinsics c;
-  c.width = s.width;
-  c.height = s.height;
-  c.k << s.fu, 0, s.cu, 0, s.fv, s.cv, 0, 0, 1;
-  c.distortion = s.distortion;
-  return c;
-}
-
-// Median |dy| of SIFT matches on the pair rectified with T (|dy| > 20 px: gross mismatches).
-double VerticalOffset(const CameraIntrinsics& c0, const CameraIntrinsics& c1,
-                      const Eigen::Isometry3d& T, const cv::Mat& left, const cv::Mat& right) {
-  cv::Mat rl, rr;
-  MakeRectifier(c0, c1, T).Rectify(left, right, rl, rr);
-  std::vector<Eigen::Vector2d> pl, pr;
-  MatchSift(rl, rr, 4000, 0.7, true, &pl, &pr);
-  std::vector<double> dy;
-  for (size_t i = 0; i < pl.size(); ++i) {
-    const double d = std::abs(pl[i].y() - pr[i].y());
-    if (d < 20) dy.push_back(d);
-  }
-  return Median(dy);
-}
 
 struct VergenceRun {
   v1::Job job;
@@ -304,7 +249,7 @@ int RunVergence(int frames, double direction_prior_deg, const fs::path& work, ui
   std::ofstream(urdf) << scenario->urdf();
   const auto chain = epmap::kinematics::UrdfChain::FromFile(urdf);
   const auto names = scenario->joint_names();
-  const CameraIntrinsics c0 = Intrinsics(scenario->cam0()), c1 = Intrinsics(scenario->cam1());
+  const CameraIntrinsics c0 = IntrinsicsOf(scenario->cam0()), c1 = IntrinsicsOf(scenario->cam1());
 
   std::vector<std::pair<std::string, VergenceRun>> runs;
   runs.emplace_back("data_only",
@@ -337,12 +282,12 @@ int RunVergence(int frames, double direction_prior_deg, const fs::path& work, ui
       auto& e = eval[name];
       e.rotation.push_back(RotationAngleDeg(T.linear(), truth.linear()));
       e.direction.push_back(DirectionAngleDeg(T.translation(), truth.translation()));
-      e.offset.push_back(VerticalOffset(c0, c1, T, f.left, f.right));
+      e.offset.push_back(MedianRowOffset(c0, c1, T, f.left, f.right));
     }
     prior_rotation.push_back(RotationAngleDeg(prior.linear(), truth.linear()));
     prior_direction.push_back(DirectionAngleDeg(prior.translation(), truth.translation()));
-    prior_offset.push_back(VerticalOffset(c0, c1, prior, f.left, f.right));
-    truth_offset.push_back(VerticalOffset(c0, c1, truth, f.left, f.right));
+    prior_offset.push_back(MedianRowOffset(c0, c1, prior, f.left, f.right));
+    truth_offset.push_back(MedianRowOffset(c0, c1, truth, f.left, f.right));
     try {
       StereoView view{f.left, f.right, prior, f.stamp_ns};
       const auto r = SelfCalibrateStereo(c0, c1, {view});
@@ -355,7 +300,7 @@ int RunVergence(int frames, double direction_prior_deg, const fs::path& work, ui
   }
   std::string failures = "{";
   for (const auto& [k, v] : single_failures) {
-    failures += (failures.size() > 1 ? "," : "") + Quote(k) + ":" + std::to_string(v);
+    failures += (failures.size() > 1 ? "," : "") + JsonQuote(k) + ":" + std::to_string(v);
   }
   failures += "}";
   std::string line = "{\"command\":\"calib-service\",\"case\":\"vergence-job\",\"job_frames\":" +
@@ -365,23 +310,24 @@ int RunVergence(int frames, double direction_prior_deg, const fs::path& work, ui
     const auto& e = eval[name];
     const auto& je = run.job.errors();
     line += ",\"" + name + "\":{\"direction_prior_sigma_deg\":" +
-            Num(run.model.baseline_direction_prior_sigma_deg) +
-            ",\"start_to_succeeded_s\":" + Num(run.job_ms / 1000, 4) +
+            JsonNumber(run.model.baseline_direction_prior_sigma_deg, 5) +
+            ",\"start_to_succeeded_s\":" + JsonNumber(run.job_ms / 1000, 4) +
             ",\"job_frames_used\":" + std::to_string(je.frames_used()) +
             ",\"job_frames_refused\":" + std::to_string(je.frames_failed()) +
-            ",\"correction_deg\":" + Num(je.prior_rotation_deviation_deg(), 4) +
-            ",\"correction_spread_deg\":" + Num(je.correction_spread_deg(), 3) +
-            ",\"job_vertical_offset_px\":" + Num(je.median_vertical_offset_px(), 4) +
-            ",\"rotation_error_deg\":" + Stats(e.rotation) +
-            ",\"baseline_direction_error_deg\":" + Stats(e.direction) +
-            ",\"vertical_offset_px\":" + Stats(e.offset) + "}";
+            ",\"correction_deg\":" + JsonNumber(je.prior_rotation_deviation_deg(), 4) +
+            ",\"correction_spread_deg\":" + JsonNumber(je.correction_spread_deg(), 3) +
+            ",\"job_vertical_offset_px\":" + JsonNumber(je.median_vertical_offset_px(), 4) +
+            ",\"rotation_error_deg\":" + JsonMedianMax(e.rotation) +
+            ",\"baseline_direction_error_deg\":" + JsonMedianMax(e.direction) +
+            ",\"vertical_offset_px\":" + JsonMedianMax(e.offset) + "}";
   }
-  line += ",\"kinematic_prior\":{\"rotation_error_deg\":" + Stats(prior_rotation) +
-          ",\"baseline_direction_error_deg\":" + Stats(prior_direction) +
-          ",\"vertical_offset_px\":" + Stats(prior_offset) + "}";
-  line += ",\"true_extrinsics\":{\"vertical_offset_px\":" + Stats(truth_offset) + "}";
-  line += ",\"single_frame_self_calibration\":{\"rotation_error_deg\":" + Stats(single.rotation) +
-          ",\"baseline_direction_error_deg\":" + Stats(single.direction) +
+  line += ",\"kinematic_prior\":{\"rotation_error_deg\":" + JsonMedianMax(prior_rotation) +
+          ",\"baseline_direction_error_deg\":" + JsonMedianMax(prior_direction) +
+          ",\"vertical_offset_px\":" + JsonMedianMax(prior_offset) + "}";
+  line += ",\"true_extrinsics\":{\"vertical_offset_px\":" + JsonMedianMax(truth_offset) + "}";
+  line += ",\"single_frame_self_calibration\":{\"rotation_error_deg\":" +
+          JsonMedianMax(single.rotation) +
+          ",\"baseline_direction_error_deg\":" + JsonMedianMax(single.direction) +
           ",\"failures\":" + failures + "}}";
   std::printf("%s\n", line.c_str());
   return 0;

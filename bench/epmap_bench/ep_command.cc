@@ -41,6 +41,7 @@
 #include <vector>
 
 #include "bench/epmap_bench/command_registry.h"
+#include "bench/epmap_bench/summary.h"
 #include "common/dataset/dataset.h"
 #include "common/imaging/pfm.h"
 #include "perception/ep/ep_settings.h"
@@ -58,8 +59,7 @@ namespace {
 namespace fs = std::filesystem;
 using epmap::dataset::Dataset;
 using Clock = std::chrono::steady_clock;
-
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+using namespace epmap::bench;
 
 // ---- a small JSON object writer (NaN becomes null) ----
 class Json {
@@ -75,14 +75,7 @@ class Json {
     return Raw(key, s.str());
   }
   Json& Int(const std::string& key, long long v) { return Raw(key, std::to_string(v)); }
-  Json& Str(const std::string& key, const std::string& v) {
-    std::string e;
-    for (char c : v) {
-      if (c == '"' || c == '\\') e += '\\';
-      e += c;
-    }
-    return Raw(key, "\"" + e + "\"");
-  }
+  Json& Str(const std::string& key, const std::string& v) { return Raw(key, JsonQuote(v)); }
   Json& Bool(const std::string& key, bool v) { return Raw(key, v ? "true" : "false"); }
   Json& Raw(const std::string& key, const std::string& v) {
     parts_.push_back("\"" + key + "\":" + v);
@@ -104,20 +97,6 @@ double ProcessCpuMs() {
   timespec t{};
   clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
   return t.tv_sec * 1e3 + t.tv_nsec / 1e6;
-}
-
-double Median(std::vector<double> v) {
-  if (v.empty()) return kNaN;
-  std::sort(v.begin(), v.end());
-  const size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-double Mean(const std::vector<double>& v) {
-  if (v.empty()) return kNaN;
-  return std::accumulate(v.begin(), v.end(), 0.0) / static_cast<double>(v.size());
-}
-double Max(const std::vector<double>& v) {
-  return v.empty() ? kNaN : *std::max_element(v.begin(), v.end());
 }
 
 // ---- the rig: rectification and the rectified left camera's pose on the base ----

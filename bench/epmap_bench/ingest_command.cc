@@ -22,6 +22,7 @@
 #include <thread>
 
 #include "bench/epmap_bench/command_registry.h"
+#include "bench/epmap_bench/summary.h"
 #include "clients/replay/dataset_publisher.h"
 #include "common/dataset/dataset.h"
 #include "common/dds/endpoints.h"
@@ -31,17 +32,12 @@
 namespace {
 
 namespace fs = std::filesystem;
+using namespace epmap::bench;
 
 int64_t WallNs() {
   return std::chrono::duration_cast<std::chrono::nanoseconds>(
              std::chrono::system_clock::now().time_since_epoch())
       .count();
-}
-
-double Percentile(std::vector<double> v, double p) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  return v[std::min(v.size() - 1, static_cast<size_t>(p * v.size()))];
 }
 
 // Peak resident memory of a process (VmHWM), in MB.

@@ -31,6 +31,7 @@
 #include <vector>
 
 #include "bench/epmap_bench/command_registry.h"
+#include "bench/epmap_bench/summary.h"
 #include "common/dataset/dataset.h"
 #include "perception/ep/expected_perception.h"
 #include "perception/internal_model/pose_source.h"
@@ -46,6 +47,7 @@
 namespace {
 
 namespace fs = std::filesystem;
+using namespace epmap::bench;
 using epmap::localisation::HeadingOf;
 using epmap::localisation::MakePose;
 using epmap::localisation::WrapAngle;
@@ -254,17 +256,6 @@ RunResult Run(const Prepared& p, epmap::mobile_mapping::MobileMapperParams param
   return out;
 }
 
-double Median(std::vector<double> v) {
-  if (v.empty()) return std::nan("");
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
-double Percentile(std::vector<double> v, double q) {
-  if (v.empty()) return std::nan("");
-  std::sort(v.begin(), v.end());
-  return v[std::min(v.size() - 1, static_cast<size_t>(q * static_cast<double>(v.size())))];
-}
-
 // Ground truth in the world frame of the run (the robot's start pose = odometry frame):
 // T_start_gt maps the ground truth's world into it, fixed at the first key frame.
 struct Truth {
@@ -332,13 +323,6 @@ std::vector<Segment2> ToSegments(const std::vector<epmap::perceptual_map::MapSeg
   return out;
 }
 
-std::string Num(double v, int digits = 4) {
-  if (!std::isfinite(v)) return "null";
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", digits, v);
-  return buf;
-}
-
 void WriteText(const fs::path& path, const std::string& text) {
   std::ofstream out(path, std::ios::binary);
   if (!out) throw std::runtime_error("cannot write " + path.string());
@@ -350,16 +334,18 @@ std::string PmapJson(const epmap::perceptual_map::PerceptualMap& m, const Truth&
   s << "{\"frame\":\"world = the robot's start pose\",\"segments\":[";
   for (size_t i = 0; i < m.segments.size(); ++i) {
     const auto& g = m.segments[i];
-    s << (i ? "," : "") << "{\"id\":" << g.id << ",\"x1\":" << Num(g.a.x())
-      << ",\"y1\":" << Num(g.a.y()) << ",\"x2\":" << Num(g.b.x()) << ",\"y2\":" << Num(g.b.y())
-      << ",\"view\":" << g.view_id << ",\"observations\":" << g.observations << "}";
+    s << (i ? "," : "") << "{\"id\":" << g.id << ",\"x1\":" << FormatFixed(g.a.x(), 4)
+      << ",\"y1\":" << FormatFixed(g.a.y(), 4) << ",\"x2\":" << FormatFixed(g.b.x(), 4)
+      << ",\"y2\":" << FormatFixed(g.b.y(), 4) << ",\"view\":" << g.view_id
+      << ",\"observations\":" << g.observations << "}";
   }
   s << "],\"kept_ids\":[";
   for (size_t i = 0; i < m.kept_segments.size(); ++i) s << (i ? "," : "") << m.kept_segments[i].id;
   const auto points = [&](const std::vector<Eigen::Vector2d>& pts) {
     s << "[";
     for (size_t i = 0; i < pts.size(); ++i) {
-      s << (i ? "," : "") << "[" << Num(pts[i].x()) << "," << Num(pts[i].y()) << "]";
+      s << (i ? "," : "") << "[" << FormatFixed(pts[i].x(), 4) << "," << FormatFixed(pts[i].y(), 4)
+        << "]";
     }
     s << "]";
   };
@@ -373,17 +359,17 @@ std::string PmapJson(const epmap::perceptual_map::PerceptualMap& m, const Truth&
   for (size_t i = 0; i < m.views.size(); ++i) {
     const auto& v = m.views[i];
     s << (i ? "," : "") << "{\"id\":" << v.id << ",\"stamp_ns\":" << v.stamp_ns
-      << ",\"x\":" << Num(v.T_map_base.translation().x())
-      << ",\"y\":" << Num(v.T_map_base.translation().y())
-      << ",\"theta\":" << Num(HeadingOf(v.T_map_base)) << ",\"objects\":" << v.objects
+      << ",\"x\":" << FormatFixed(v.T_map_base.translation().x(), 4)
+      << ",\"y\":" << FormatFixed(v.T_map_base.translation().y(), 4)
+      << ",\"theta\":" << FormatFixed(HeadingOf(v.T_map_base), 4) << ",\"objects\":" << v.objects
       << ",\"tracked\":" << v.tracked << ",\"in_map\":" << (v.in_map ? "true" : "false") << "}";
   }
   s << "]";
   if (truth.has_pose) {
     // Where the start pose is in the ground truth's world, to compare runs that start elsewhere.
-    s << ",\"gt_start\":[" << Num(truth.T_gt_start.translation().x(), 6) << ","
-      << Num(truth.T_gt_start.translation().y(), 6) << "," << Num(HeadingOf(truth.T_gt_start), 6)
-      << "]";
+    s << ",\"gt_start\":[" << FormatFixed(truth.T_gt_start.translation().x(), 6) << ","
+      << FormatFixed(truth.T_gt_start.translation().y(), 6) << ","
+      << FormatFixed(HeadingOf(truth.T_gt_start), 6) << "]";
   }
   s << "}\n";
   return s.str();
@@ -469,24 +455,25 @@ std::string Svg(const epmap::perceptual_map::PerceptualMap& m, const Truth& trut
   const auto X = [&](const Eigen::Vector2d& p) { return (p.x() - lo.x()) * scale; };
   const auto Y = [&](const Eigen::Vector2d& p) { return (hi.y() - p.y()) * scale; };
   std::ostringstream s;
-  s << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << Num((hi.x() - lo.x()) * scale, 0)
-    << "\" height=\"" << Num((hi.y() - lo.y()) * scale, 0) << "\">\n"
+  s << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\""
+    << FormatFixed((hi.x() - lo.x()) * scale, 0) << "\" height=\""
+    << FormatFixed((hi.y() - lo.y()) * scale, 0) << "\">\n"
     << "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n"
     << "<text x=\"8\" y=\"16\" font-size=\"13\" font-family=\"sans-serif\">grey: true walls; "
        "red: perceptual map (dark red: kept after redundancy removal); blue: path; green: outer "
        "boundary; orange: inner boundary; dashed grey: true path. 1 m = 30 px</text>\n";
   const auto line = [&](const Eigen::Vector2d& a, const Eigen::Vector2d& b, const char* colour,
                         double width, const char* extra = "") {
-    s << "<line x1=\"" << Num(X(a), 1) << "\" y1=\"" << Num(Y(a), 1) << "\" x2=\"" << Num(X(b), 1)
-      << "\" y2=\"" << Num(Y(b), 1) << "\" stroke=\"" << colour << "\" stroke-width=\"" << width
-      << "\" " << extra << "/>\n";
+    s << "<line x1=\"" << FormatFixed(X(a), 1) << "\" y1=\"" << FormatFixed(Y(a), 1) << "\" x2=\""
+      << FormatFixed(X(b), 1) << "\" y2=\"" << FormatFixed(Y(b), 1) << "\" stroke=\"" << colour
+      << "\" stroke-width=\"" << width << "\" " << extra << "/>\n";
   };
   const auto polyline = [&](const std::vector<Eigen::Vector2d>& pts, const char* colour,
                             double width, const char* extra = "") {
     if (pts.size() < 2) return;
     s << "<polyline fill=\"none\" stroke=\"" << colour << "\" stroke-width=\"" << width << "\" "
       << extra << " points=\"";
-    for (const auto& p : pts) s << Num(X(p), 1) << "," << Num(Y(p), 1) << " ";
+    for (const auto& p : pts) s << FormatFixed(X(p), 1) << "," << FormatFixed(Y(p), 1) << " ";
     s << "\"/>\n";
   };
   for (const auto& w : truth.walls) line(w.a, w.b, "#bbbbbb", 4);
@@ -501,14 +488,14 @@ std::string Svg(const epmap::perceptual_map::PerceptualMap& m, const Truth& trut
   polyline(m.boundary.inner, "#ff9900", 1.2, "stroke-opacity=\"0.8\"");
   polyline(m.path, "#0040ff", 2);
   for (const auto& p : m.path) {
-    s << "<circle cx=\"" << Num(X(p), 1) << "\" cy=\"" << Num(Y(p), 1)
+    s << "<circle cx=\"" << FormatFixed(X(p), 1) << "\" cy=\"" << FormatFixed(Y(p), 1)
       << "\" r=\"2.5\" fill=\"#0040ff\"/>\n";
   }
   if (!m.path.empty()) {
-    s << "<text x=\"" << Num(X(m.path.front()) + 4, 1) << "\" y=\"" << Num(Y(m.path.front()) - 4, 1)
-      << "\" font-size=\"14\" fill=\"#0040ff\">S</text>\n";
-    s << "<text x=\"" << Num(X(m.path.back()) + 4, 1) << "\" y=\"" << Num(Y(m.path.back()) - 4, 1)
-      << "\" font-size=\"14\" fill=\"#0040ff\">E</text>\n";
+    s << "<text x=\"" << FormatFixed(X(m.path.front()) + 4, 1) << "\" y=\""
+      << FormatFixed(Y(m.path.front()) - 4, 1) << "\" font-size=\"14\" fill=\"#0040ff\">S</text>\n";
+    s << "<text x=\"" << FormatFixed(X(m.path.back()) + 4, 1) << "\" y=\""
+      << FormatFixed(Y(m.path.back()) - 4, 1) << "\" font-size=\"14\" fill=\"#0040ff\">E</text>\n";
   }
   s << "</svg>\n";
   return s.str();
@@ -625,9 +612,9 @@ int RunCommand(int argc, char** argv) {
       std::ostringstream csv;
       csv << "#timestamp [ns],x [m],y [m],theta [rad]\n";
       for (const auto& r : poses) {
-        csv << r.stamp_ns << "," << Num(r.T_world_base.translation().x(), 6) << ","
-            << Num(r.T_world_base.translation().y(), 6) << "," << Num(HeadingOf(r.T_world_base), 6)
-            << "\n";
+        csv << r.stamp_ns << "," << FormatFixed(r.T_world_base.translation().x(), 6) << ","
+            << FormatFixed(r.T_world_base.translation().y(), 6) << ","
+            << FormatFixed(HeadingOf(r.T_world_base), 6) << "\n";
       }
       WriteText(fs::path(out_dir) / "poses.csv", csv.str());
     }
@@ -652,18 +639,19 @@ int RunCommand(int argc, char** argv) {
         if (r.accepted && k < poses.size()) {
           const auto& rec = poses[k++];
           csv << epmap::localisation::ToString(rec.heading_source) << ","
-              << Num(rec.odometry_dtheta, 6) << "," << Num(rec.visual_dtheta, 6) << ",";
+              << FormatFixed(rec.odometry_dtheta, 6) << "," << FormatFixed(rec.visual_dtheta, 6)
+              << ",";
         } else {
           csv << (r.rejection ? r.rejection->reason : "") << ",,,";
         }
-        csv << (true_theta && prev_true ? Num(WrapAngle(*true_theta - *prev_true), 6) : "") << ","
-            << r.edge_points << "," << r.features << "," << r.tracked_pairs << ","
-            << r.registration_inliers << "," << r.group_closed << "," << Num(r.shift_m.x(), 3)
-            << "," << Num(r.shift_m.y(), 3);
+        csv << (true_theta && prev_true ? FormatFixed(WrapAngle(*true_theta - *prev_true), 6) : "")
+            << "," << r.edge_points << "," << r.features << "," << r.tracked_pairs << ","
+            << r.registration_inliers << "," << r.group_closed << ","
+            << FormatFixed(r.shift_m.x(), 3) << "," << FormatFixed(r.shift_m.y(), 3);
         if (r.accepted && k > 0) {
           const auto& T = poses[k - 1].T_world_base;
-          csv << "," << Num(T.translation().x(), 4) << "," << Num(T.translation().y(), 4) << ","
-              << Num(HeadingOf(T), 5);
+          csv << "," << FormatFixed(T.translation().x(), 4) << ","
+              << FormatFixed(T.translation().y(), 4) << "," << FormatFixed(HeadingOf(T), 5);
         }
         csv << "\n";
         if (true_theta) prev_true = true_theta;
@@ -697,7 +685,8 @@ int RunCommand(int argc, char** argv) {
       << "\",\"frames\":" << p.data.frames.size() << ",\"key_frames\":" << p.key_frames.size()
       << ",\"panning_stops\":" << (p.panning_stops ? "true" : "false")
       << ",\"camera\":{\"width\":" << p.camera.width << ",\"height\":" << p.camera.height
-      << ",\"fx\":" << Num(p.camera.fx, 3) << ",\"baseline_m\":" << Num(p.camera.baseline_m, 5)
+      << ",\"fx\":" << FormatFixed(p.camera.fx, 3)
+      << ",\"baseline_m\":" << FormatFixed(p.camera.baseline_m, 5)
       << ",\"rectified_input\":" << (p.rectifier ? "false" : "true") << "}";
     const auto& c = maps.counters;
     j << ",\"counters\":{\"key_frames\":" << c.key_frames << ",\"rejected\":" << c.rejected
@@ -715,18 +704,18 @@ int RunCommand(int argc, char** argv) {
       first = false;
     }
     j << "}}";
-    j << ",\"heading\":{\"odometry_final_error_deg\":" << Num(odo.heading_deg, 3)
-      << ",\"corrected_final_error_deg\":" << Num(cor.heading_deg, 3)
-      << ",\"target_deg\":" << Num(heading_target, 3) << ",\"pass\":"
+    j << ",\"heading\":{\"odometry_final_error_deg\":" << FormatFixed(odo.heading_deg, 3)
+      << ",\"corrected_final_error_deg\":" << FormatFixed(cor.heading_deg, 3)
+      << ",\"target_deg\":" << FormatFixed(heading_target, 3) << ",\"pass\":"
       << (std::isfinite(cor.heading_deg) ? (cor.heading_deg <= heading_target ? "true" : "false")
                                          : "null")
-      << "},\"position\":{\"odometry_final_error_m\":" << Num(odo.position_m, 3)
-      << ",\"corrected_final_error_m\":" << Num(cor.position_m, 3) << "}";
+      << "},\"position\":{\"odometry_final_error_m\":" << FormatFixed(odo.position_m, 3)
+      << ",\"corrected_final_error_m\":" << FormatFixed(cor.position_m, 3) << "}";
 
     const auto segs = ToSegments(maps.perceptual.segments);
     const auto kept = ToSegments(maps.perceptual.kept_segments);
     j << ",\"perceptual_map\":{\"segments\":" << segs.size() << ",\"kept_segments\":" << kept.size()
-      << ",\"segment_length_m\":" << Num(epmap::mobile_mapping::TotalLength(segs), 2);
+      << ",\"segment_length_m\":" << FormatFixed(epmap::mobile_mapping::TotalLength(segs), 2);
     {
       // Views that joined the map, and how many of them no common object could anchor (placed
       // by the motion since the previous map view instead, III-C's fallback).
@@ -745,18 +734,18 @@ int RunCommand(int argc, char** argv) {
       const double stray = 1.0 - epmap::mobile_mapping::CoveredShare(segs, truth.walls, 1.0);
       const double cov_kept = epmap::mobile_mapping::CoveredShare(truth.walls, kept, 0.5);
       const double stray_kept = 1.0 - epmap::mobile_mapping::CoveredShare(kept, truth.walls, 1.0);
-      j << ",\"wall_length_m\":" << Num(epmap::mobile_mapping::TotalLength(truth.walls), 2)
-        << ",\"wall_coverage_0p5m\":" << Num(cov) << ",\"wall_coverage_target\":0.70"
-        << ",\"visible_wall_length_m\":" << Num(visible_len, 2)
-        << ",\"visible_wall_coverage_0p5m\":" << Num(cov_vis)
-        << ",\"stray_share_1m\":" << Num(stray) << ",\"stray_target\":0.15"
-        << ",\"kept_wall_coverage_0p5m\":" << Num(cov_kept)
-        << ",\"kept_stray_share_1m\":" << Num(stray_kept);
+      j << ",\"wall_length_m\":" << FormatFixed(epmap::mobile_mapping::TotalLength(truth.walls), 2)
+        << ",\"wall_coverage_0p5m\":" << FormatFixed(cov, 4) << ",\"wall_coverage_target\":0.70"
+        << ",\"visible_wall_length_m\":" << FormatFixed(visible_len, 2)
+        << ",\"visible_wall_coverage_0p5m\":" << FormatFixed(cov_vis, 4)
+        << ",\"stray_share_1m\":" << FormatFixed(stray, 4) << ",\"stray_target\":0.15"
+        << ",\"kept_wall_coverage_0p5m\":" << FormatFixed(cov_kept, 4)
+        << ",\"kept_stray_share_1m\":" << FormatFixed(stray_kept, 4);
       if (!truth.furniture.empty()) {
         auto solid = truth.walls;
         solid.insert(solid.end(), truth.furniture.begin(), truth.furniture.end());
         j << ",\"stray_share_1m_walls_and_furniture\":"
-          << Num(1.0 - epmap::mobile_mapping::CoveredShare(segs, solid, 1.0));
+          << FormatFixed(1.0 - epmap::mobile_mapping::CoveredShare(segs, solid, 1.0), 4);
       }
     }
     if (!compare_path.empty()) {
@@ -773,9 +762,9 @@ int RunCommand(int argc, char** argv) {
       const double ba = epmap::mobile_mapping::CoveredShare(b, a, 0.5);
       j << ",\"compare\":{\"other\":\"" << compare_path << "\",\"frame\":\""
         << (in_gt ? "ground truth world" : "shared start pose")
-        << "\",\"this_covered_by_other_0p5m\":" << Num(ab)
-        << ",\"other_covered_by_this_0p5m\":" << Num(ba)
-        << ",\"shape_similarity\":" << Num(0.5 * (ab + ba)) << "}";
+        << "\",\"this_covered_by_other_0p5m\":" << FormatFixed(ab, 4)
+        << ",\"other_covered_by_this_0p5m\":" << FormatFixed(ba, 4)
+        << ",\"shape_similarity\":" << FormatFixed(0.5 * (ab + ba), 4) << "}";
     }
     j << "}";
 
@@ -783,17 +772,18 @@ int RunCommand(int argc, char** argv) {
                                         const std::vector<Segment2>& solid) {
       const auto s = epmap::mobile_mapping::ScoreGrid(g, solid);
       std::ostringstream o;
-      o << "{\"iou\":" << Num(s.iou) << ",\"iou_observed\":" << Num(s.iou_observed)
+      o << "{\"iou\":" << FormatFixed(s.iou, 4)
+        << ",\"iou_observed\":" << FormatFixed(s.iou_observed, 4)
         << ",\"occupied_cells\":" << s.occupied << ",\"wall_cells\":" << s.wall_cells
         << ",\"wall_cells_observed\":" << s.wall_cells_observed
-        << ",\"precision\":" << Num(s.precision)
-        << ",\"recall_observed\":" << Num(s.recall_observed) << "}";
+        << ",\"precision\":" << FormatFixed(s.precision, 4)
+        << ",\"recall_observed\":" << FormatFixed(s.recall_observed, 4) << "}";
       return o.str();
     };
     const auto grid_score = [&](const epmap::occupancy::GridExport& g) {
       return grid_score_against(g, truth.walls);
     };
-    j << ",\"occupancy\":{\"resolution_m\":" << Num(grid_export.resolution_m, 3)
+    j << ",\"occupancy\":{\"resolution_m\":" << FormatFixed(grid_export.resolution_m, 3)
       << ",\"width\":" << grid_export.width << ",\"height\":" << grid_export.height
       << ",\"layers\":" << grid_export.layer_count;
     if (!truth.walls.empty())
@@ -832,15 +822,17 @@ int RunCommand(int argc, char** argv) {
                       PmapPicture(r.maps->perceptual, truth, true_path));
         }
         v << (v.tellp() > 0 ? "," : "") << "{\"name\":\"" << var.name
-          << "\",\"final_heading_error_deg\":" << Num(e.heading_deg, 3)
-          << ",\"final_position_error_m\":" << Num(e.position_m, 3);
+          << "\",\"final_heading_error_deg\":" << FormatFixed(e.heading_deg, 3)
+          << ",\"final_position_error_m\":" << FormatFixed(e.position_m, 3);
         if (!truth.walls.empty()) {
           v << ",\"wall_coverage_0p5m\":"
-            << Num(epmap::mobile_mapping::CoveredShare(
-                   truth.walls, ToSegments(r.maps->perceptual.segments), 0.5))
+            << FormatFixed(epmap::mobile_mapping::CoveredShare(
+                               truth.walls, ToSegments(r.maps->perceptual.segments), 0.5),
+                           4)
             << ",\"stray_share_1m\":"
-            << Num(1.0 - epmap::mobile_mapping::CoveredShare(
-                             ToSegments(r.maps->perceptual.segments), truth.walls, 1.0));
+            << FormatFixed(1.0 - epmap::mobile_mapping::CoveredShare(
+                                     ToSegments(r.maps->perceptual.segments), truth.walls, 1.0),
+                           4);
         }
         v << "}";
       }
@@ -851,18 +843,18 @@ int RunCommand(int argc, char** argv) {
 
     const double med = Median(main.key_frame_ms);
     const double sg = Median(main.sgbm_ms);
-    j << ",\"timing\":{\"per_key_frame_ms_median\":" << Num(med, 2)
-      << ",\"per_key_frame_ms_p90\":" << Num(Percentile(main.key_frame_ms, 0.9), 2)
-      << ",\"per_key_frame_ms_max\":" << Num(Percentile(main.key_frame_ms, 1.0), 2)
-      << ",\"snapshot_ms_median\":" << Num(Median(main.snapshot_ms), 2)
-      << ",\"snapshot_ms_p90\":" << Num(Percentile(main.snapshot_ms, 0.9), 2)
+    j << ",\"timing\":{\"per_key_frame_ms_median\":" << FormatFixed(med, 2)
+      << ",\"per_key_frame_ms_p90\":" << FormatFixed(Percentile(main.key_frame_ms, 0.9), 2)
+      << ",\"per_key_frame_ms_max\":" << FormatFixed(Percentile(main.key_frame_ms, 1.0), 2)
+      << ",\"snapshot_ms_median\":" << FormatFixed(Median(main.snapshot_ms), 2)
+      << ",\"snapshot_ms_p90\":" << FormatFixed(Percentile(main.snapshot_ms, 0.9), 2)
       << ",\"target_ms\":100,\"baseline\":\"full-frame SGBM (64 disparities, block 5) on the "
          "same key frames\",\"baseline_sgbm_ms_median\":"
-      << Num(sg, 2) << ",\"ratio_to_baseline\":" << Num(med / sg, 3) << "}";
+      << FormatFixed(sg, 2) << ",\"ratio_to_baseline\":" << FormatFixed(med / sg, 3) << "}";
     // The EP ran on every frame before the maps (as in epmapd); its time is not per key frame.
     j << ",\"motion_mask\":{\"enabled\":" << (no_motion_mask ? "false" : "true")
       << ",\"ep_frames\":" << masks.frames << ",\"key_frames_masked\":" << masks.by_frame.size()
-      << ",\"ep_ms_median\":" << Num(Median(masks.ep_ms), 2) << "}";
+      << ",\"ep_ms_median\":" << FormatFixed(Median(masks.ep_ms), 2) << "}";
     j << ",\"outputs\":\"" << out_dir << "\"}";
     if (json) {
       std::cout << j.str() << "\n";

@@ -32,6 +32,7 @@
 #include <vector>
 
 #include "bench/epmap_bench/command_registry.h"
+#include "bench/epmap_bench/summary.h"
 #include "clients/sim/scenario.h"
 #include "common/dataset/dataset.h"
 #include "common/dds/endpoints.h"
@@ -43,6 +44,7 @@
 namespace {
 
 namespace fs = std::filesystem;
+using namespace epmap::bench;
 using epmap::sim::MakeScenario;
 using epmap::sim::ScenarioOptions;
 
@@ -56,11 +58,6 @@ double WallMs() {
   return std::chrono::duration<double, std::milli>(
              std::chrono::steady_clock::now().time_since_epoch())
       .count();
-}
-
-double Median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? 0.0 : v[v.size() / 2];
 }
 
 // Times `fn` `n` times; returns {median thread-CPU ms, median wall ms}.

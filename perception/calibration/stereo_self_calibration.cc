@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <nlopt.hpp>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/features2d.hpp>
@@ -467,6 +468,29 @@ StereoExtrinsicsModel StereoExtrinsicsModel::FromJson(std::string_view text) {
     throw CalibrationError(ErrorCode::kInvalidInput,
                            std::string("cannot read stereo-extrinsics model: ") + e.what());
   }
+}
+
+double MedianRowOffset(const cv::Mat& rectified_left, const cv::Mat& rectified_right) {
+  constexpr double kGrossMismatchPx = 20;
+  std::vector<Eigen::Vector2d> pl, pr;
+  MatchSift(rectified_left, rectified_right, 4000, 0.7, true, &pl, &pr);
+  std::vector<double> dy;
+  for (size_t i = 0; i < pl.size(); ++i) {
+    const double d = std::abs(pl[i].y() - pr[i].y());
+    if (d < kGrossMismatchPx) dy.push_back(d);
+  }
+  if (dy.empty()) return std::numeric_limits<double>::quiet_NaN();
+  std::sort(dy.begin(), dy.end());
+  const size_t n = dy.size();
+  return n % 2 ? dy[n / 2] : 0.5 * (dy[n / 2 - 1] + dy[n / 2]);
+}
+
+double MedianRowOffset(const CameraIntrinsics& cam0, const CameraIntrinsics& cam1,
+                       const Eigen::Isometry3d& T_cam0_cam1, const cv::Mat& left,
+                       const cv::Mat& right) {
+  cv::Mat rectified_left, rectified_right;
+  MakeRectifier(cam0, cam1, T_cam0_cam1).Rectify(left, right, rectified_left, rectified_right);
+  return MedianRowOffset(rectified_left, rectified_right);
 }
 
 }  // namespace epmap::calibration

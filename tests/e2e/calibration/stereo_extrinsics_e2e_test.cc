@@ -8,6 +8,7 @@
 
 #include <algorithm>
 
+#include "perception/calibration/dataset_intrinsics.h"
 #include "perception/calibration/stereo_self_calibration.h"
 #include "services/mapping/calibration/stereo_correction.h"
 #include "tests/e2e/calibration/calibration_e2e.h"
@@ -18,30 +19,6 @@ namespace {
 double Median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   return v.empty() ? NAN : v[v.size() / 2];
-}
-
-calibration::CameraIntrinsics Intrinsics(const dataset::CameraSensor& s) {
-  calibration::CameraIntrinsics c;
-  c.width = s.width;
-  c.height = s.height;
-  c.k << s.fu, 0, s.cu, 0, s.fv, s.cv, 0, 0, 1;
-  c.distortion = s.distortion;
-  return c;
-}
-
-// Median |dy| of SIFT matches between the rectified images (gross mismatches above 20 px out).
-double VerticalOffset(const calibration::CameraIntrinsics& c0,
-                      const calibration::CameraIntrinsics& c1, const Eigen::Isometry3d& T,
-                      const cv::Mat& left, const cv::Mat& right) {
-  cv::Mat rl, rr;
-  calibration::MakeRectifier(c0, c1, T).Rectify(left, right, rl, rr);
-  std::vector<Eigen::Vector2d> pl, pr;
-  calibration::MatchSift(rl, rr, 4000, 0.7, true, &pl, &pr);
-  std::vector<double> dy;
-  for (size_t i = 0; i < pl.size(); ++i) {
-    if (std::abs(pl[i].y() - pr[i].y()) < 20) dy.push_back(std::abs(pl[i].y() - pr[i].y()));
-  }
-  return Median(dy);
 }
 
 TEST(CalibrationStereoE2e, VergenceExtrinsicsFromTheLiveStream) {
@@ -82,7 +59,8 @@ TEST(CalibrationStereoE2e, VergenceExtrinsicsFromTheLiveStream) {
   const auto scenario = sim::MakeScenario({.name = "vergence"});
   const auto chain = kinematics::UrdfChain::FromFile(urdf);
   const auto names = scenario->joint_names();
-  const auto c0 = Intrinsics(scenario->cam0()), c1 = Intrinsics(scenario->cam1());
+  const auto c0 = calibration::IntrinsicsOf(scenario->cam0()),
+             c1 = calibration::IntrinsicsOf(scenario->cam1());
   std::vector<double> rotation, direction, offset, prior_rotation;
   for (int index = 15; index < 300; index += 30) {
     const auto f = scenario->Render(index);
@@ -99,7 +77,7 @@ TEST(CalibrationStereoE2e, VergenceExtrinsicsFromTheLiveStream) {
         calibration::RotationAngleDeg(prior.linear(), f.gt_T_cam0_cam1.linear()));
     direction.push_back(
         calibration::DirectionAngleDeg(corrected.translation(), f.gt_T_cam0_cam1.translation()));
-    offset.push_back(VerticalOffset(c0, c1, corrected, f.left, f.right));
+    offset.push_back(calibration::MedianRowOffset(c0, c1, corrected, f.left, f.right));
   }
   std::printf(
       "truth, median of %zu frames: rotation %.3f deg (prior %.3f), baseline direction "
