@@ -139,7 +139,7 @@ void MatchSift(const cv::Mat& left, const cv::Mat& right, int max_features, doub
 // How well a pair is rectified, judged by the images alone: the median |row difference| of SIFT
 // matches between the rectified images (px; 0 = perfect), matches 20 px or more apart dropped as
 // gross mismatches (no plausible calibration puts one point that far off its row); NaN without
-// a match. The independent check of a calibration in tests and benchmarks.
+// a match. What the stereo job reports, and the check of a calibration in tests and benchmarks.
 double MedianRowOffset(const cv::Mat& rectified_left, const cv::Mat& rectified_right);
 // The same for raw images rectified with the given calibration (MakeRectifier).
 double MedianRowOffset(const CameraIntrinsics& cam0, const CameraIntrinsics& cam1,

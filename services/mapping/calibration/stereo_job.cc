@@ -18,8 +18,6 @@ using calibration::ErrorCode;
 
 constexpr double kDefaultMaxPriorDeviationDeg = 3.0;
 constexpr uint32_t kMaxFrames = 1000;
-// |dy| above this cannot be one point on two rows of any plausible rectification: a mismatch.
-constexpr double kGrossVerticalOffsetPx = 20.0;
 
 double Median(std::vector<double> v) {
   if (v.empty()) return std::nan("");
@@ -57,21 +55,6 @@ std::optional<calibration::CameraIntrinsics> IntrinsicsFromCameraInfo(
 }
 
 namespace {
-
-double VerticalOffsetPx(const calibration::CameraIntrinsics& c0,
-                        const calibration::CameraIntrinsics& c1, const Eigen::Isometry3d& T,
-                        const cv::Mat& left, const cv::Mat& right) {
-  cv::Mat rl, rr;
-  calibration::MakeRectifier(c0, c1, T).Rectify(left, right, rl, rr);
-  std::vector<Eigen::Vector2d> pl, pr;
-  calibration::MatchSift(rl, rr, 4000, 0.7, true, &pl, &pr);
-  std::vector<double> dy;
-  for (size_t i = 0; i < pl.size(); ++i) {
-    const double d = std::abs(pl[i].y() - pr[i].y());
-    if (d < kGrossVerticalOffsetPx) dy.push_back(d);
-  }
-  return Median(dy);
-}
 
 const char* Advice(ErrorCode code) {
   switch (code) {
@@ -275,8 +258,9 @@ StereoJobResult RunStereoJob(const v1::StereoExtrinsicsSpec& spec_in,
     const Eigen::Isometry3d T = m.Apply(c.prior);
     spread.push_back(RotationDifferenceDeg(corrections[i], m.correction));
     direction.push_back(calibration::DirectionAngleDeg(c.prior.translation(), T.translation()));
-    offset.push_back(VerticalOffsetPx(c.cam0, c.cam1, T, c.frame.left, c.frame.right));
-    prior_offset.push_back(VerticalOffsetPx(c.cam0, c.cam1, c.prior, c.frame.left, c.frame.right));
+    offset.push_back(calibration::MedianRowOffset(c.cam0, c.cam1, T, c.frame.left, c.frame.right));
+    prior_offset.push_back(
+        calibration::MedianRowOffset(c.cam0, c.cam1, c.prior, c.frame.left, c.frame.right));
   }
   m.spread_deg = Median(spread);
   m.median_vertical_offset_px = Median(offset);
