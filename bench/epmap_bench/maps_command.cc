@@ -734,8 +734,13 @@ int RunCommand(int argc, char** argv) {
       const double stray = 1.0 - epmap::mobile_mapping::CoveredShare(segs, truth.walls, 1.0);
       const double cov_kept = epmap::mobile_mapping::CoveredShare(truth.walls, kept, 0.5);
       const double stray_kept = 1.0 - epmap::mobile_mapping::CoveredShare(kept, truth.walls, 1.0);
-      j << ",\"wall_length_m\":" << FormatFixed(epmap::mobile_mapping::TotalLength(truth.walls), 2)
+      const double wall_len = epmap::mobile_mapping::TotalLength(truth.walls);
+      // No map can cover wall that is never in line of sight of the route (within the edge
+      // range): the share that is bounds wall_coverage on this run's world.
+      j << ",\"wall_length_m\":" << FormatFixed(wall_len, 2)
         << ",\"wall_coverage_0p5m\":" << FormatFixed(cov, 4) << ",\"wall_coverage_target\":0.70"
+        << ",\"wall_coverage_upper_bound\":"
+        << FormatFixed(wall_len > 0 ? visible_len / wall_len : kNaN, 4)
         << ",\"visible_wall_length_m\":" << FormatFixed(visible_len, 2)
         << ",\"visible_wall_coverage_0p5m\":" << FormatFixed(cov_vis, 4)
         << ",\"stray_share_1m\":" << FormatFixed(stray, 4) << ",\"stray_target\":0.15"
@@ -775,7 +780,13 @@ int RunCommand(int argc, char** argv) {
       o << "{\"iou\":" << FormatFixed(s.iou, 4)
         << ",\"iou_observed\":" << FormatFixed(s.iou_observed, 4)
         << ",\"occupied_cells\":" << s.occupied << ",\"wall_cells\":" << s.wall_cells
-        << ",\"wall_cells_observed\":" << s.wall_cells_observed
+        << ",\"wall_cells_observed\":"
+        << s.wall_cells_observed
+        // Occupied needs evidence: the intersection is at most the wall cells observed, the
+        // union at least all wall cells, so no grid that saw these cells scores more.
+        << ",\"iou_upper_bound\":"
+        << FormatFixed(
+               s.wall_cells ? static_cast<double>(s.wall_cells_observed) / s.wall_cells : kNaN, 4)
         << ",\"precision\":" << FormatFixed(s.precision, 4)
         << ",\"recall_observed\":" << FormatFixed(s.recall_observed, 4) << "}";
       return o.str();
