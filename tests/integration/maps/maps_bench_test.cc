@@ -36,8 +36,9 @@ TEST(MapsBench, WritesTheMapsAndTheFigures) {
   const std::string figures = Slurp(dir / "figures.txt");
   for (const char* key :
        {"\"odometry_final_error_deg\":", "\"corrected_final_error_deg\":",
-        "\"wall_coverage_0p5m\":", "\"stray_share_1m\":", "\"iou\":", "\"no_heading_correction\":",
-        "\"per_key_frame_ms_median\":", "\"baseline_sgbm_ms_median\":"}) {
+        "\"wall_coverage_0p5m\":", "\"visible_wall_share\":", "\"stray_share_1m\":", "\"iou\":",
+        "\"iou_upper_bound\":", "\"no_heading_correction\":", "\"per_key_frame_ms_median\":",
+        "\"baseline_sgbm_ms_median\":"}) {
     EXPECT_NE(figures.find(key), std::string::npos) << key << " missing in " << figures;
   }
   EXPECT_EQ(figures.find("null"), std::string::npos) << figures;
