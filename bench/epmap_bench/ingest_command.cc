@@ -151,7 +151,7 @@ int Run(int argc, char** argv) {
         "\"frames_processed\":%llu,\"frames_rejected\":%llu,\"queue_dropped\":%llu,"
         "\"latency_ms_p50\":%.2f,\"latency_ms_p99\":%.2f,\"peak_rss_mb\":%.1f,"
         "\"recomputed_share_median\":%.4f,\"baseline_reader_received\":%zu,"
-        "\"baseline_transport_ms_p50\":%.2f,\"baseline_transport_ms_p99\":%.2f,"
+        "\"baseline_transport_ms_p50\":%s,\"baseline_transport_ms_p99\":%s,"
         "\"epmapd_exit_code\":%d}\n",
         dataset_path.c_str(), dataset.cam0.width, dataset.cam0.height, rate, report.seconds,
         report.frames, static_cast<unsigned long long>(left_received),
@@ -161,8 +161,9 @@ int Run(int argc, char** argv) {
         static_cast<unsigned long long>(s.frames_processed()),
         static_cast<unsigned long long>(s.frames_rejected()),
         static_cast<unsigned long long>(s.queue_dropped()), s.latency_ms_p50(), s.latency_ms_p99(),
-        peak_mb, s.recomputed_share_median(), transport_ms.size(), Percentile(transport_ms, 0.5),
-        Percentile(transport_ms, 0.99), code.value_or(-1));
+        peak_mb, s.recomputed_share_median(), transport_ms.size(),
+        FormatFixed(Percentile(transport_ms, 0.5), 2).c_str(),  // null without a sample
+        FormatFixed(Percentile(transport_ms, 0.99), 2).c_str(), code.value_or(-1));
     fs::remove_all(log_dir);
     return 0;
   } catch (const std::exception& e) {
