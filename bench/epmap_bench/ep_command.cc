@@ -482,10 +482,15 @@ void Summarise(const PassResult& r, int settle, Json* j) {
   j->Num("ratio_of_medians", Median(r.ep_ms) / Median(r.full_ms));
   // The mean shows what batching (border strips, refresh bands) moves out of the median frame.
   j->Num("ratio_of_means", Mean(r.ep_ms) / Mean(r.full_ms));
+  // The slowest frames: what a batched refresh costs the frames that carry it.
+  j->Num("ep_ms_p90", Percentile(r.ep_ms, 0.9));
+  j->Num("ep_ms_max", Max(r.ep_ms));
+  j->Num("full_ms_p90", Percentile(r.full_ms, 0.9));
   // The same in CPU time (all threads): robust to how many cores each part got.
   j->Num("ep_cpu_ms_median", Median(r.ep_cpu_ms));
   j->Num("full_cpu_ms_median", Median(r.full_cpu_ms));
   j->Num("cpu_ratio_median", Median(r.cpu_ratio));
+  j->Num("cpu_ratio_of_means", Mean(r.ep_cpu_ms) / Mean(r.full_cpu_ms));
   j->Num("recomputed_share_median", Median(r.share));
   j->Num("recomputed_share_mean", Mean(r.share));
   j->Num("sgbm_area_share_median", Median(r.stereo_area));

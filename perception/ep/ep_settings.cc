@@ -51,6 +51,7 @@ std::vector<std::pair<std::string, Field>> Fields(EpParams* p) {
       {"refresh.every_n_frames", &p->refresh.every_n_frames},
       {"refresh.max_recompute_share", &p->refresh.max_recompute_share},
       {"refresh.rolling_period_frames", &p->refresh.rolling_period_frames},
+      {"refresh.rolling_every_frames", &p->refresh.rolling_every_frames},
       {"max_rotation_rate_rad_s", &p->max_rotation_rate_rad_s},
       {"max_translation_speed_m_s", &p->max_translation_speed_m_s},
       {"min_frame_interval_s", &p->min_frame_interval_s},

@@ -295,6 +295,10 @@ void EpParams::Validate() const {
   sgbm.Validate();
   roi.Validate();
   if (refresh.every_n_frames < 0) throw std::invalid_argument("EP: every_n_frames must be >= 0");
+  if (refresh.rolling_period_frames < 0 || refresh.rolling_every_frames < 1) {
+    throw std::invalid_argument(
+        "EP: rolling_period_frames must be >= 0 and rolling_every_frames >= 1");
+  }
   if (!(refresh.max_recompute_share > 0)) {
     throw std::invalid_argument("EP: max_recompute_share must be > 0 (>= 1 disables it)");
   }
@@ -557,15 +561,19 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
         recompute.setTo(255, emerged);
       }
     }
-    // Rolling refresh: one band of rows per frame, so that every pixel is measured afresh at
-    // least every rolling_period_frames frames whatever the comparator saw (a wrong disparity
-    // on a surface without texture shows neither in E nor in the stereo check).
+    // Rolling refresh: one band of rows every rolling_every_frames frames, so that every pixel
+    // is measured afresh at least every rolling_period_frames frames whatever the comparator
+    // saw (a wrong disparity on a surface without texture shows neither in E nor in the stereo
+    // check).
     if (params_.refresh.rolling_period_frames > 0) {
       const int period = params_.refresh.rolling_period_frames;
-      const int rows = (size.height + period - 1) / period;
-      const int band = static_cast<int>(frame_index_ % static_cast<uint64_t>(period));
+      const int every = std::min(params_.refresh.rolling_every_frames, period);
+      const int bands = (period + every - 1) / every;
+      const int rows = (size.height + bands - 1) / bands;
+      const uint64_t slot = frame_index_ % static_cast<uint64_t>(bands * every);
+      const int band = static_cast<int>(slot / static_cast<uint64_t>(every));
       const int y0 = band * rows;
-      if (y0 < size.height) {
+      if (slot % static_cast<uint64_t>(every) == 0 && y0 < size.height) {
         recompute(cv::Rect(0, y0, size.width, std::min(rows, size.height - y0))).setTo(255);
       }
     }

@@ -60,8 +60,8 @@ TEST(ExpectedPerception, StillRigComputesOnceThenPredictsTheSameMap) {
     EXPECT_TRUE(res->compared);
     EXPECT_EQ(cv::countNonZero(res->unexpected), 0);
     EXPECT_LT(res->mean_error, 0.5);
-    // Only the rolling refresh band (1/20 of the rows) is recomputed.
-    EXPECT_LT(res->recomputed_share, 0.07);
+    // Only the rolling refresh band is recomputed: 1/5 of the rows on frame 4, nothing else.
+    EXPECT_LT(res->recomputed_share, k == 4 ? 0.22 : 0.01) << "frame " << k;
     int same = 0, known = 0;
     for (int v = 0; v < f.left.rows; ++v) {
       for (int u = 0; u < f.left.cols; ++u) {
@@ -75,6 +75,38 @@ TEST(ExpectedPerception, StillRigComputesOnceThenPredictsTheSameMap) {
   }
   EXPECT_EQ(ep.counters().frames, 6u);
   EXPECT_EQ(ep.counters().predicted, 5u);
+}
+
+// The rolling refresh re-measures every matchable pixel once per period, one band every
+// rolling_every_frames frames (and nothing else on a still rig).
+TEST(ExpectedPerception, TheRollingRefreshCoversTheImageOncePerPeriod) {
+  const testing::SyntheticScene scene;
+  const Frame f = Render(scene, 0, false);
+  for (const int every : {1, 4}) {
+    EpParams p = Params();
+    p.refresh.rolling_period_frames = 20;
+    p.refresh.rolling_every_frames = every;
+    ExpectedPerception ep(scene.camera(), p);
+    ep.Process(f.left, f.right, f.T_base_cam0, f.stamp_ns);
+    cv::Mat covered = cv::Mat::zeros(f.left.size(), CV_8U);
+    for (int k = 1; k <= 20; ++k) {
+      const auto res = ep.Process(f.left, f.right, f.T_base_cam0, f.stamp_ns + k);
+      ASSERT_EQ(res->mode, FrameMode::kPredicted);
+      const double rows_share = 1.0 / (20 / every);
+      if (k % every == 0) {
+        EXPECT_GT(res->recomputed_share, 0.5 * rows_share) << "every " << every << " frame " << k;
+        EXPECT_LT(res->recomputed_share, 1.1 * rows_share) << "every " << every << " frame " << k;
+      } else {
+        EXPECT_LT(res->recomputed_share, 0.01) << "every " << every << " frame " << k;
+      }
+      covered |= res->recompute;
+    }
+    // Every row, across the columns SGBM can match (right of its search range's blind margin).
+    const int first = p.sgbm.min_disparity + p.sgbm.num_disparities + p.sgbm.block_size;
+    const cv::Mat matchable = covered(cv::Rect(first, 0, f.left.cols - first - 4, f.left.rows));
+    EXPECT_EQ(cv::countNonZero(matchable), static_cast<int>(matchable.total()))
+        << "every " << every;
+  }
 }
 
 // The paper's experiment in small: a turning head, a square moving on its own. The unexpected
@@ -297,7 +329,8 @@ TEST(ExpectedPerception, RefreshPolicies) {
       FrameMode::kRefreshScheduled};
   EXPECT_EQ(modes, expected);
   EpParams share = Params();
-  share.refresh.max_recompute_share = 1e-4;  // anything at all triggers a full frame
+  share.refresh.max_recompute_share = 1e-4;  // anything at all triggers a full frame:
+  share.refresh.rolling_every_frames = 1;    // the refresh band of frame 1, at least
   ExpectedPerception ep2(scene.camera(), share);
   const Frame f0 = Render(scene, 0, false), f1 = Render(scene, 1, false);
   ep2.Process(f0.left, f0.right, f0.T_base_cam0, f0.stamp_ns);
