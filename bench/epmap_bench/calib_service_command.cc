@@ -37,6 +37,7 @@
 #include "perception/calibration/dataset_intrinsics.h"
 #include "perception/calibration/eye_hand_calibration.h"
 #include "perception/calibration/stereo_self_calibration.h"
+#include "services/mapping/api/proto_conversions.h"
 #include "services/mapping/calibration/stereo_correction.h"
 
 namespace {
@@ -131,15 +132,7 @@ int RunEyeHand(const std::string& csv, int runs, const fs::path& work, uint32_t 
   v1::AddSamplesRequest add;
   add.set_set("bench");
   for (const auto& s : samples) {
-    auto* p = add.add_samples();
-    p->set_stamp_ns(s.stamp_ns);
-    p->mutable_xa()->set_x(s.xa.x());
-    p->mutable_xa()->set_y(s.xa.y());
-    p->mutable_xa()->set_z(s.xa.z());
-    p->mutable_xb()->set_x(s.xb.x());
-    p->mutable_xb()->set_y(s.xb.y());
-    p->mutable_xb()->set_z(s.xb.z());
-    p->set_path(s.path);
+    epmap::mapping::ToProto(s.stamp_ns, s.xa, s.xb, s.path, add.add_samples());
   }
   const auto t_add = Clock::now();
   v1::AddSamplesResponse added;

@@ -22,6 +22,7 @@
 #include "epmap/v1/calibration_service.grpc.pb.h"
 #include "perception/calibration/calibration_error.h"
 #include "perception/calibration/eye_hand_samples.h"
+#include "services/mapping/api/proto_conversions.h"
 
 namespace {
 
@@ -282,15 +283,7 @@ void Setup(CLI::App& app, ClientOptions& o) {
         request.set_set(*set);
         for (size_t i = begin; i < std::min(samples.size(), begin + kBatch); ++i) {
           const auto& s = samples[i];
-          auto* p = request.add_samples();
-          p->set_stamp_ns(s.stamp_ns);
-          p->mutable_xa()->set_x(s.xa.x());
-          p->mutable_xa()->set_y(s.xa.y());
-          p->mutable_xa()->set_z(s.xa.z());
-          p->mutable_xb()->set_x(s.xb.x());
-          p->mutable_xb()->set_y(s.xb.y());
-          p->mutable_xb()->set_z(s.xb.z());
-          p->set_path(s.path);
+          epmap::mapping::ToProto(s.stamp_ns, s.xa, s.xb, s.path, request.add_samples());
         }
         v1::AddSamplesResponse response;
         const auto context = o.Context();

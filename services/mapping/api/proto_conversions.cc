@@ -47,6 +47,14 @@ void ToProto(const Eigen::Vector3d& v, v1::Vector3* out) {
   out->set_z(v.z());
 }
 
+void ToProto(int64_t stamp_ns, const Eigen::Vector3d& xa, const Eigen::Vector3d& xb,
+             const std::string& path, v1::EyeHandSample* out) {
+  out->set_stamp_ns(stamp_ns);
+  ToProto(xa, out->mutable_xa());
+  ToProto(xb, out->mutable_xb());
+  out->set_path(path);
+}
+
 void ToProto(const Eigen::Isometry3d& T, const std::string& parent, const std::string& child,
              v1::Transform* out) {
   out->set_parent_frame(parent);

@@ -1,8 +1,9 @@
 #pragma once
 // cv::Mat / Eigen <-> epmap.v1 messages.
 
-#include <Eigen/Geometry>
+#include <epmap/v1/calibration_service.pb.h>
 #include <epmap/v1/common.pb.h>
+#include <Eigen/Geometry>
 
 #include <opencv2/core.hpp>
 
@@ -10,12 +11,17 @@
 
 namespace epmap::mapping {
 
-void ToProto(const cv::Mat& image_f32, v1::FloatImage* out);   // CV_32FC1
-void ToProto(const cv::Mat& image_u8, v1::ByteImage* out);     // CV_8UC1 or CV_8UC3
+void ToProto(const cv::Mat& image_f32, v1::FloatImage* out);  // CV_32FC1
+void ToProto(const cv::Mat& image_u8, v1::ByteImage* out);    // CV_8UC1 or CV_8UC3
 void ToProto(const stereo::RectifiedGeometry& g, v1::CameraModel* out);
 void ToProto(const Eigen::Isometry3d& T, const std::string& parent, const std::string& child,
              v1::Transform* out);
 void ToProto(const Eigen::Vector3d& v, v1::Vector3* out);
+// One eye-hand sample (paper 001: X_A where stereo saw the end effector, X_B where the
+// kinematics puts it, ROOT frame) as CalibrationService takes it. Fields, not a struct: the
+// service, the simulator and the CSV reader each have their own sample type.
+void ToProto(int64_t stamp_ns, const Eigen::Vector3d& xa, const Eigen::Vector3d& xb,
+             const std::string& path, v1::EyeHandSample* out);
 
 // Client side: messages back to cv::Mat (throws std::invalid_argument if sizes disagree).
 cv::Mat FromProto(const v1::FloatImage& image);

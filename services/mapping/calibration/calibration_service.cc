@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "services/mapping/api/proto_conversions.h"
 #include "services/mapping/calibration/eye_hand_job.h"
 
 namespace epmap::mapping {
@@ -47,19 +48,6 @@ calibration::EyeHandSample FromProto(const v1::EyeHandSample& p) {
   s.xb = Eigen::Vector3d(p.xb().x(), p.xb().y(), p.xb().z());
   s.path = p.path();
   return s;
-}
-
-void ToProto(const Eigen::Vector3d& v, v1::Vector3* out) {
-  out->set_x(v.x());
-  out->set_y(v.y());
-  out->set_z(v.z());
-}
-
-void ToProto(const calibration::EyeHandSample& s, v1::EyeHandSample* out) {
-  out->set_stamp_ns(s.stamp_ns);
-  ToProto(s.xa, out->mutable_xa());
-  ToProto(s.xb, out->mutable_xb());
-  out->set_path(s.path);
 }
 
 std::string Format(const Eigen::Vector3d& v) {
@@ -144,7 +132,8 @@ grpc::Status CalibrationServiceImpl::ListSamples(grpc::ServerContext*,
     }
     response->set_total(total);
     if (request->include_samples()) {
-      for (const auto& s : store_->Samples(request->set())) ToProto(s, response->add_samples());
+      for (const auto& s : store_->Samples(request->set()))
+        ToProto(s.stamp_ns, s.xa, s.xb, s.path, response->add_samples());
     }
     return grpc::Status::OK;
   });

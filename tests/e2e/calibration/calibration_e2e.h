@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "clients/sim/scenario.h"
+#include "services/mapping/api/proto_conversions.h"
 #include "tests/support/epmapd_fixture.h"
 
 namespace epmap::testing {
@@ -35,16 +36,7 @@ inline std::unique_ptr<grpc::ClientContext> Deadline(int seconds = 10) {
 inline std::vector<v1::EyeHandSample> SimEyeHandSamples(uint64_t seed = 1) {
   std::vector<v1::EyeHandSample> out;
   for (const auto& s : sim::MakeScenario({.name = "eye-hand", .seed = seed})->EyeHandSamples()) {
-    v1::EyeHandSample p;
-    p.set_stamp_ns(s.stamp_ns);
-    p.mutable_xa()->set_x(s.xa.x());
-    p.mutable_xa()->set_y(s.xa.y());
-    p.mutable_xa()->set_z(s.xa.z());
-    p.mutable_xb()->set_x(s.xb.x());
-    p.mutable_xb()->set_y(s.xb.y());
-    p.mutable_xb()->set_z(s.xb.z());
-    p.set_path(s.path);
-    out.push_back(p);
+    mapping::ToProto(s.stamp_ns, s.xa, s.xb, s.path, &out.emplace_back());
   }
   return out;
 }
