@@ -60,17 +60,6 @@ bool Call(ClientOptions& o,
   return false;
 }
 
-const char* KindName(v1::JobKind kind) {
-  switch (kind) {
-    case v1::EYE_HAND:
-      return "eye-hand";
-    case v1::STEREO_EXTRINSICS:
-      return "stereo-extrinsics";
-    default:
-      return "?";
-  }
-}
-
 std::string Cm(double m) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.2f cm", 100 * m);
@@ -80,7 +69,8 @@ std::string Cm(double m) {
 // One line per job for people.
 std::string Describe(const v1::Job& j) {
   std::ostringstream s;
-  s << j.id() << "  " << KindName(j.kind()) << "  " << v1::JobState_Name(j.state());
+  s << j.id() << "  " << epmap::mapping::JobKindName(j.kind()) << "  "
+    << v1::JobState_Name(j.state());
   if (j.state() == v1::RUNNING) {
     s << " " << static_cast<int>(std::lround(100 * j.progress())) << "% (" << j.stage() << ")";
   }
@@ -249,12 +239,6 @@ int Transform(const ClientOptions& o, const std::string& in_path, const std::str
   std::cerr << "transformed " << response.points_size() << " points with " << response.model_id()
             << "\n";
   return 0;
-}
-
-v1::JobKind ParseKind(const std::string& name) {
-  if (name == "eye-hand") return v1::EYE_HAND;
-  if (name == "stereo-extrinsics") return v1::STEREO_EXTRINSICS;
-  return v1::JOB_KIND_UNSPECIFIED;
 }
 
 void Setup(CLI::App& app, ClientOptions& o) {
@@ -494,7 +478,7 @@ void Setup(CLI::App& app, ClientOptions& o) {
         ->check(CLI::IsMember({"eye-hand", "stereo-extrinsics"}));
     cmd->callback([&o, json, kind] {
       v1::ListModelsRequest request;
-      request.set_kind(ParseKind(*kind));
+      request.set_kind(epmap::mapping::JobKindFromName(*kind));
       v1::ListModelsResponse response;
       if (!Call(o, &v1::CalibrationService::Stub::ListModels, request, &response)) return;
       if (*json) {
@@ -514,7 +498,8 @@ void Setup(CLI::App& app, ClientOptions& o) {
       request.set_id(*id);
       v1::Model model;
       if (!Call(o, &v1::CalibrationService::Stub::ActivateModel, request, &model)) return;
-      std::printf("active %s model: %s\n", KindName(model.kind()), model.id().c_str());
+      std::printf("active %s model: %s\n", epmap::mapping::JobKindName(model.kind()),
+                  model.id().c_str());
     });
   }
   {
@@ -525,7 +510,7 @@ void Setup(CLI::App& app, ClientOptions& o) {
         ->capture_default_str();
     cmd->callback([&o, kind] {
       v1::RollbackModelRequest request;
-      request.set_kind(ParseKind(*kind));
+      request.set_kind(epmap::mapping::JobKindFromName(*kind));
       v1::Model model;
       if (!Call(o, &v1::CalibrationService::Stub::RollbackModel, request, &model)) return;
       if (model.id().empty()) {

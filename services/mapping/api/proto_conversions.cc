@@ -55,6 +55,24 @@ void ToProto(int64_t stamp_ns, const Eigen::Vector3d& xa, const Eigen::Vector3d&
   out->set_path(path);
 }
 
+const char* JobKindName(v1::JobKind kind) {
+  switch (kind) {
+    case v1::EYE_HAND:
+      return "eye-hand";
+    case v1::STEREO_EXTRINSICS:
+      return "stereo-extrinsics";
+    default:
+      return "unspecified";
+  }
+}
+
+v1::JobKind JobKindFromName(const std::string& name) {
+  for (const v1::JobKind kind : {v1::EYE_HAND, v1::STEREO_EXTRINSICS}) {
+    if (name == JobKindName(kind)) return kind;
+  }
+  return v1::JOB_KIND_UNSPECIFIED;
+}
+
 void ToProto(const Eigen::Isometry3d& T, const std::string& parent, const std::string& child,
              v1::Transform* out) {
   out->set_parent_frame(parent);

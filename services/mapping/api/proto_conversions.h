@@ -23,6 +23,11 @@ void ToProto(const Eigen::Vector3d& v, v1::Vector3* out);
 void ToProto(int64_t stamp_ns, const Eigen::Vector3d& xa, const Eigen::Vector3d& xb,
              const std::string& path, v1::EyeHandSample* out);
 
+// A calibration job kind's name, as the service's model ids ("eye-hand-3") and epmapctl use it
+// ("unspecified" for JOB_KIND_UNSPECIFIED), and back (JOB_KIND_UNSPECIFIED for an unknown name).
+const char* JobKindName(v1::JobKind kind);
+v1::JobKind JobKindFromName(const std::string& name);
+
 // Client side: messages back to cv::Mat (throws std::invalid_argument if sizes disagree).
 cv::Mat FromProto(const v1::FloatImage& image);
 cv::Mat FromProto(const v1::ByteImage& image);

@@ -9,6 +9,8 @@
 #include <set>
 #include <utility>
 
+#include "services/mapping/api/proto_conversions.h"
+
 namespace epmap::mapping {
 
 namespace {
@@ -202,17 +204,6 @@ v1::Model ReadModel(const Statement& s) {
 }
 
 }  // namespace
-
-const char* KindName(v1::JobKind kind) {
-  switch (kind) {
-    case v1::EYE_HAND:
-      return "eye-hand";
-    case v1::STEREO_EXTRINSICS:
-      return "stereo-extrinsics";
-    default:
-      return "unspecified";
-  }
-}
 
 CalibrationStore::CalibrationStore(const std::filesystem::path& dir) : path_(dir / kFileName) {
   std::error_code ec;
@@ -447,7 +438,7 @@ v1::Model CalibrationStore::FinishJobWithModel(v1::Job& job, v1::Model model, bo
   next.Bind(1, static_cast<int64_t>(model.kind())).Step();
   const auto version = static_cast<uint32_t>(next.Int(0));
   model.set_version(version);
-  model.set_id(std::string(KindName(model.kind())) + "-" + std::to_string(version));
+  model.set_id(std::string(JobKindName(model.kind())) + "-" + std::to_string(version));
   model.set_job_id(job.id());
   model.set_created_ns(now_ns);
   Statement insert(db_,
@@ -533,7 +524,7 @@ std::optional<v1::Model> CalibrationStore::Rollback(v1::JobKind kind, int64_t /*
   {
     std::lock_guard lock(mutex_);
     if (!ActiveModelId(kind)) {
-      throw StoreError(Code::kFailedPrecondition, std::string("no ") + KindName(kind) +
+      throw StoreError(Code::kFailedPrecondition, std::string("no ") + JobKindName(kind) +
                                                       " model is active: nothing to roll back");
     }
     Transaction tx(db_);

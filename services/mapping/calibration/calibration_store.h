@@ -37,9 +37,6 @@ class StoreError : public std::runtime_error {
   Code code_;
 };
 
-// "eye-hand" / "stereo-extrinsics": the prefix of model ids and the CLI's kind names.
-const char* KindName(v1::JobKind kind);
-
 class CalibrationStore {
  public:
   static constexpr const char* kFileName = "calibration.sqlite3";

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <stdexcept>
 
+#include "services/mapping/api/proto_conversions.h"
 #include "services/mapping/calibration/eye_hand_job.h"
 
 namespace epmap::mapping {
@@ -196,7 +197,7 @@ std::optional<v1::Model> JobRunner::Rollback(v1::JobKind kind) {
     spdlog::info("calibration: rolled back to {}", restored->id());
   } else {
     ClearActiveModel(kind, active_);
-    spdlog::info("calibration: rolled back; no {} model active", KindName(kind));
+    spdlog::info("calibration: rolled back; no {} model active", JobKindName(kind));
   }
   return restored;
 }
@@ -211,7 +212,8 @@ std::vector<std::string> JobRunner::LoadActiveModels() {
       InstallActiveModel(*model, active_);
       loaded.push_back(model->id());
     } catch (const std::exception& e) {
-      spdlog::error("calibration: the active {} model is not used: {}", KindName(kind), e.what());
+      spdlog::error("calibration: the active {} model is not used: {}", JobKindName(kind),
+                    e.what());
     }
   }
   return loaded;
@@ -322,7 +324,7 @@ void JobRunner::Run(const std::shared_ptr<Live>& live) {
     FinishLocked(live);
   }
   changed_.notify_all();
-  spdlog::info("calibration {} ({}) {}", live->job.id(), KindName(live->job.kind()), outcome);
+  spdlog::info("calibration {} ({}) {}", live->job.id(), JobKindName(live->job.kind()), outcome);
 }
 
 void JobRunner::FinishLocked(const std::shared_ptr<Live>& live) {
