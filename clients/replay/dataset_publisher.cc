@@ -127,10 +127,18 @@ ReplayReport Replay(const dataset::Dataset& d, const ReplayOptions& options) {
   ReplayReport report;
   sensor_msgs::msg::Image image_msg;
   sensor_msgs::msg::CameraInfo info_msg;
-  for (size_t pass = 0;; ++pass) {
+  // Looping: what is scheduled before loop_for_s goes out, the last pass cut there (a span
+  // shorter than one pass is not stretched to a whole one).
+  const int64_t loop_end_ns = static_cast<int64_t>(options.loop_for_s * 1e9);
+  bool done = false;
+  for (size_t pass = 0; !done; ++pass) {
     for (const Event& e : events) {
       const int64_t offset_ns = static_cast<int64_t>(pass) * pass_ns +
                                 static_cast<int64_t>((e.stamp_ns - t0_data) * scale);
+      if (loop_end_ns > 0 && offset_ns >= loop_end_ns) {
+        done = true;
+        break;
+      }
       std::this_thread::sleep_until(t0 + std::chrono::nanoseconds(offset_ns));
       // Restamped messages carry the wall-clock time they were meant to be sent at.
       const int64_t stamp = restamp ? wall0 + offset_ns : e.stamp_ns;
@@ -167,8 +175,7 @@ ReplayReport Replay(const dataset::Dataset& d, const ReplayOptions& options) {
       }
     }
     report.loops = pass + 1;
-    const double elapsed = std::chrono::duration<double>(Clock::now() - t0).count();
-    if (options.loop_for_s <= 0.0 || elapsed + pass_ns * 1e-9 > options.loop_for_s) break;
+    if (loop_end_ns <= 0 || static_cast<int64_t>(pass + 1) * pass_ns >= loop_end_ns) done = true;
   }
   report.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
   std::this_thread::sleep_for(

@@ -16,8 +16,9 @@ struct ReplayOptions {
   double wait_for_reader_s = 10.0;
   double linger_s = 0.5;      // keep the participant alive so the last samples arrive
   bool restamp = false;       // stamp with the wall clock instead of the dataset's stamps
-  double loop_for_s = 0.0;    // > 0: replay the sequence again and again for this long
-                              // (implies restamp, so stamps keep increasing)
+  double loop_for_s = 0.0;    // > 0: replay the sequence again and again for this long (what
+                              // is scheduled before it; the last pass may be partial; implies
+                              // restamp, so stamps keep increasing)
   size_t preload_frames = 0;  // decode up to this many frames into memory before sending
                               // (keeps PNG decoding off the timed path of benchmarks)
   dds::TopicNames topics;

@@ -2,6 +2,7 @@
 // image-sized transport, and the guarded type support refuses oversized and undecodable
 // samples with a count instead of handing garbage on.
 
+#include <epmap_dds/CameraInfoPubSubTypes.h>
 #include <epmap_dds/ImagePubSubTypes.h>
 #include <gtest/gtest.h>
 
@@ -9,7 +10,10 @@
 #include <fastdds/dds/topic/TopicDataType.hpp>
 #include <mutex>
 #include <thread>
+#include <tuple>
 
+#include "clients/replay/dataset_publisher.h"
+#include "common/dataset/dataset.h"
 #include "common/dds/endpoints.h"
 #include "common/dds/ros_conversions.h"
 #include "tests/support/test_env.h"
@@ -78,6 +82,43 @@ TEST(DdsRoundTrip, ImagesArriveIntactAndOversizedAreRefused) {
       std::chrono::seconds(10)));
   EXPECT_EQ(reader.counters().oversized.load(), 1u);
   EXPECT_EQ(reader.counters().received.load(), 2u);
+}
+
+// epmap-replay --loop-for S sends what is scheduled in the first S seconds: a span shorter than
+// one pass is not stretched to a whole pass, a longer one ends part-way through a pass.
+TEST(DatasetReplay, LoopsForTheRequestedTimeOnly) {
+  EPMAP_REQUIRE_SHARED_DATA("euroc-v101-excerpt");
+  const dataset::Dataset euroc = dataset::Load(testing::SharedDataDir() / "euroc-v101-excerpt");
+  ASSERT_EQ(euroc.frames.size(), 40u);  // 2 s at 20 Hz; the spans below end between two frames
+  const uint32_t domain = testing::UniqueDomainId(11);
+  dds::Participant reader_side(domain, "reader");
+  std::atomic<int> received{0};
+  ImageReader reader(
+      reader_side, dds::TopicNames().left_image, [&](sensor_msgs::msg::Image&&) { received++; },
+      8'000'000);
+  // The replay waits for a reader on every stream it sends.
+  ImageReader right(
+      reader_side, dds::TopicNames().right_image, [](sensor_msgs::msg::Image&&) {}, 8'000'000);
+  using InfoReader =
+      dds::Reader<sensor_msgs::msg::CameraInfo, sensor_msgs::msg::CameraInfoPubSubType>;
+  InfoReader left_info(
+      reader_side, dds::TopicNames().left_info, [](sensor_msgs::msg::CameraInfo&&) {}, 64'000);
+  InfoReader right_info(
+      reader_side, dds::TopicNames().right_info, [](sensor_msgs::msg::CameraInfo&&) {}, 64'000);
+  for (const auto& [seconds, frames, loops] :
+       {std::tuple{1.025, 21, 1}, std::tuple{3.025, 61, 2}}) {
+    received = 0;
+    replay::ReplayOptions options;
+    options.domain = domain;
+    options.rate_hz = 20.0;
+    options.loop_for_s = seconds;
+    const replay::ReplayReport report = replay::Replay(euroc, options);
+    EXPECT_EQ(report.frames, static_cast<size_t>(frames)) << seconds << " s";
+    EXPECT_EQ(report.loops, static_cast<size_t>(loops)) << seconds << " s";
+    EXPECT_NEAR(report.seconds, seconds, 0.5) << seconds << " s";
+    EXPECT_TRUE(WaitFor([&] { return received.load() == frames; }, std::chrono::seconds(10)))
+        << seconds << " s: " << received.load() << " images received";
+  }
 }
 
 }  // namespace
