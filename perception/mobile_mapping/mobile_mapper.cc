@@ -46,6 +46,9 @@ void MobileMapperParams::Validate() const {
   if (!(reference_max_height_m > reference_min_height_m)) {
     throw std::invalid_argument("mobile mapper: reference_max_height_m must exceed the minimum");
   }
+  if (!std::isfinite(reference_skip_from_height_m) || !std::isfinite(reference_skip_to_height_m)) {
+    throw std::invalid_argument("mobile mapper: the skipped reference height band must be finite");
+  }
   if (occupancy_edge_row_step < 1) {
     throw std::invalid_argument("mobile mapper: occupancy_edge_row_step must be >= 1");
   }
@@ -194,7 +197,10 @@ KeyFrameReport MobileMapper::AddKeyFrame(const KeyFrame& f) {
   for (const auto& e : edges) {
     const Eigen::Vector3d p = f.T_base_cam * e.p_cam;
     const double h = p.z() - params_.floor_z_in_base_m;
-    if (h >= params_.reference_min_height_m && h <= params_.reference_max_height_m) {
+    const bool in_skipped_band =
+        h > params_.reference_skip_from_height_m && h < params_.reference_skip_to_height_m;
+    if (h >= params_.reference_min_height_m && h <= params_.reference_max_height_m &&
+        !in_skipped_band) {
       frame.reference_points.emplace_back(p.x(), p.y());
     }
     if (static_cast<int>(e.v) % params_.occupancy_edge_row_step == 0 &&
@@ -205,6 +211,7 @@ KeyFrameReport MobileMapper::AddKeyFrame(const KeyFrame& f) {
                                                       params_.features.min_point_sigma_m));
     }
   }
+  report.reference_points = frame.reference_points.size();
   for (const auto& s : features.features) {
     frame.points_base.push_back(f.T_base_cam * s.p_cam);
     frame.sigmas.push_back(localisation::DepthSigma(camera_, s.p_cam.z(),

@@ -4,6 +4,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <cmath>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -167,6 +168,8 @@ void Apply(const YAML::Node& root, ServiceConfig& c) {
     s.Get("max_odometry_step_rad", c.maps.max_odometry_step_rad);
     s.Get("max_odometry_speed_mps", c.maps.max_odometry_speed_mps);
     s.Get("open_stop_in_maps", c.maps.open_stop_in_maps);
+    s.Get("reference_skip_from_height_m", c.maps.reference_skip_from_height_m);
+    s.Get("reference_skip_to_height_m", c.maps.reference_skip_to_height_m);
     s.RejectUnknownKeys();
   }
   {
@@ -240,6 +243,10 @@ void ServiceConfig::Validate() const {
         !(m.max_odometry_speed_mps > 0)) {
       bad("maps.max_odometry_step_m, max_odometry_step_rad and max_odometry_speed_mps must be "
           "positive");
+    }
+    if (!std::isfinite(m.reference_skip_from_height_m) ||
+        !std::isfinite(m.reference_skip_to_height_m)) {
+      bad("maps.reference_skip_from_height_m and reference_skip_to_height_m must be finite");
     }
   }
   static const std::set<std::string> kLevels{"trace", "debug", "info", "warn", "error"};
@@ -382,6 +389,10 @@ std::string ToYaml(const ServiceConfig& c) {
   out << YAML::Key << "max_odometry_step_rad" << YAML::Value << c.maps.max_odometry_step_rad;
   out << YAML::Key << "max_odometry_speed_mps" << YAML::Value << c.maps.max_odometry_speed_mps;
   out << YAML::Key << "open_stop_in_maps" << YAML::Value << c.maps.open_stop_in_maps;
+  out << YAML::Key << "reference_skip_from_height_m" << YAML::Value
+      << c.maps.reference_skip_from_height_m;
+  out << YAML::Key << "reference_skip_to_height_m" << YAML::Value
+      << c.maps.reference_skip_to_height_m;
   out << YAML::EndMap;
   out << YAML::Key << "log" << YAML::Value << YAML::BeginMap << YAML::Key << "level" << YAML::Value
       << c.log_level << YAML::EndMap;

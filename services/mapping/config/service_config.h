@@ -79,6 +79,10 @@ struct MapsSettings {
   // at each key frame: a copy of the maps and a registration); false: a stop shows only once
   // the base moves on.
   bool open_stop_in_maps = true;
+  // Perceptual-map reference points are taken from every height but this band above the floor
+  // (furniture; mobile_mapping::MobileMapperParams). from >= to: no band.
+  double reference_skip_from_height_m = 0.3;
+  double reference_skip_to_height_m = 1.2;
 };
 
 struct ServiceConfig {

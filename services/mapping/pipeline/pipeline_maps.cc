@@ -26,6 +26,8 @@ mobile_mapping::MobileMapperParams MakeMapperParams(
   p.max_odometry_step_m = s.max_odometry_step_m;
   p.max_odometry_step_rad = s.max_odometry_step_rad;
   p.max_odometry_speed_mps = s.max_odometry_speed_mps;
+  p.reference_skip_from_height_m = s.reference_skip_from_height_m;
+  p.reference_skip_to_height_m = s.reference_skip_to_height_m;
   p.joint_limits = limits;
   return p;
 }

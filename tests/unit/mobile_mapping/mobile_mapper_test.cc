@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 #include "perception/localisation/pose_corrector.h"
@@ -245,6 +246,28 @@ TEST_F(MobileMapperTest, NothingIsTakenFromWhereSomethingMovesOnItsOwn) {
   EXPECT_EQ(
       cv::countNonZero(mobile_mapping::GrowMovingMask(dot)),
       (2 * mobile_mapping::kMovingMaskGrowPx + 1) * (2 * mobile_mapping::kMovingMaskGrowPx + 1));
+}
+
+// Reference points come from every height between the limits but the skipped (furniture) band;
+// the grid still gets its edge points from all heights.
+TEST_F(MobileMapperTest, ReferencePointsSkipTheFurnitureBand) {
+  const KeyFrame& f = (*frames_)[0];
+  const auto report = [&](double from, double to) {
+    auto p = Params();
+    p.reference_skip_from_height_m = from;
+    p.reference_skip_to_height_m = to;
+    MobileMapper mapper(testing::BumblebeeLikeCamera(), p);
+    return mapper.AddKeyFrame(f);
+  };
+  const auto no_band = report(0, 0), band = report(0.3, 1.2), everything = report(-1, 5);
+  ASSERT_GT(no_band.reference_points, 50u);
+  EXPECT_GT(band.reference_points, 0u);
+  EXPECT_LT(band.reference_points, no_band.reference_points);
+  EXPECT_EQ(everything.reference_points, 0u);
+  EXPECT_EQ(everything.edge_points, no_band.edge_points);
+  auto bad = Params();
+  bad.reference_skip_to_height_m = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(MobileMapper(testing::BumblebeeLikeCamera(), bad), std::invalid_argument);
 }
 
 TEST_F(MobileMapperTest, AStopWithNoEdgesIsCountedNotFatal) {
