@@ -39,8 +39,8 @@ void PrintHuman(const epmap::v1::ServiceStatus& s) {
   }
   std::printf("ingest-to-snapshot latency: p50 %.1f ms, p99 %.1f ms\n", s.latency_ms_p50(),
               s.latency_ms_p99());
-  std::printf("recomputed share: last %.3f, median %.3f; full refreshes %llu\n",
-              s.recomputed_share_last(), s.recomputed_share_median(),
+  std::printf("recomputed share: last %.3f, median %.3f, mean %.3f; full refreshes %llu\n",
+              s.recomputed_share_last(), s.recomputed_share_median(), s.recomputed_share_mean(),
               static_cast<unsigned long long>(s.full_refreshes()));
   if (s.unexpected_watchers())
     std::printf("watch-unexpected streams: %u\n", s.unexpected_watchers());
@@ -51,10 +51,11 @@ void PrintHuman(const epmap::v1::ServiceStatus& s) {
   PrintCounters("lost in transport", s.transport_lost_by_topic());
   PrintCounters("messages by topic", s.messages_by_topic(), /*always=*/true);
   if (s.stages_size()) {
-    std::printf("stages (ms):            last   median      p99  samples\n");
+    std::printf("stages (ms):            last   median     mean      p99  samples\n");
     for (const auto& t : s.stages()) {
-      std::printf("  %-18s %8.2f %8.2f %8.2f %8llu\n", t.stage().c_str(), t.last_ms(),
-                  t.median_ms(), t.p99_ms(), static_cast<unsigned long long>(t.samples()));
+      std::printf("  %-18s %8.2f %8.2f %8.2f %8.2f %8llu\n", t.stage().c_str(), t.last_ms(),
+                  t.median_ms(), t.mean_ms(), t.p99_ms(),
+                  static_cast<unsigned long long>(t.samples()));
     }
   }
   PrintCounters("events", s.events());

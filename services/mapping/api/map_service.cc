@@ -53,6 +53,7 @@ grpc::Status MapServiceImpl::GetStatus(grpc::ServerContext*, const v1::GetStatus
     t->set_last_ms(s.last);
     t->set_median_ms(s.median);
     t->set_p99_ms(s.p99);
+    t->set_mean_ms(s.mean);
     t->set_samples(s.samples);
   }
   if (const auto latest = service_.snapshots().Latest()) out->set_last_stamp_ns(latest->stamp_ns);
@@ -62,6 +63,7 @@ grpc::Status MapServiceImpl::GetStatus(grpc::ServerContext*, const v1::GetStatus
   const auto share = pipeline.figures().Summary("recomputed_share");
   out->set_recomputed_share_last(share.last);
   out->set_recomputed_share_median(share.median);
+  out->set_recomputed_share_mean(share.mean);
   out->set_full_refreshes(pipeline.full_refreshes());
   AddCounters(pipeline.events().Snapshot(), out->mutable_events());
   const auto& models = service_.calibration().active_models();

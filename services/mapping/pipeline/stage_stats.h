@@ -1,6 +1,6 @@
 #pragma once
 // Rolling statistics of per-stage durations (and any other per-frame figure): the last N
-// values, their median and 99th percentile. Thread-safe: the pipeline writes, the API reads.
+// values, their median, mean and 99th percentile. Thread-safe: the pipeline writes, the API reads.
 
 #include <algorithm>
 #include <cstdint>
@@ -14,6 +14,7 @@ namespace epmap::mapping {
 struct RollingSummary {
   double last = 0;
   double median = 0;
+  double mean = 0;  // what work done every few frames costs on average (the median hides it)
   double p99 = 0;
   uint64_t samples = 0;
 };
@@ -63,6 +64,9 @@ class RollingStats {
     std::vector<double> sorted = s.values;
     std::sort(sorted.begin(), sorted.end());
     r.median = sorted[sorted.size() / 2];
+    double sum = 0;
+    for (const double v : sorted) sum += v;
+    r.mean = sum / static_cast<double>(sorted.size());
     r.p99 = sorted[std::min(sorted.size() - 1, (sorted.size() * 99) / 100)];
     return r;
   }

@@ -106,6 +106,9 @@ TEST_F(EpServiceE2E, WatchedRegionsFollowTheTrueMovingObject) {
   EXPECT_GE(status.frames_processed(), kFrames * 3u / 4) << status.DebugString();
   EXPECT_EQ(status.frames_rejected(), 0u) << status.DebugString();
   EXPECT_LT(status.recomputed_share_median(), 0.5) << status.DebugString();
+  // The refresh band (a fifth of the rows every fourth frame) shows in the mean.
+  EXPECT_GT(status.recomputed_share_mean(), 0.02) << status.DebugString();
+  EXPECT_LT(status.recomputed_share_mean(), 0.5) << status.DebugString();
   bool has_predict_stage = false;
   for (const auto& s : status.stages()) has_predict_stage |= s.stage() == "ep.predict";
   EXPECT_TRUE(has_predict_stage) << status.DebugString();
