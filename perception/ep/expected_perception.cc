@@ -568,7 +568,7 @@ std::shared_ptr<const EpResult> ExpectedPerception::Process(const cv::Mat& left_
     if (params_.refresh.rolling_period_frames > 0) {
       const int period = params_.refresh.rolling_period_frames;
       const int every = std::min(params_.refresh.rolling_every_frames, period);
-      const int bands = (period + every - 1) / every;
+      const int bands = period / every;  // so that the cycle, bands x every, stays <= period
       const int rows = (size.height + bands - 1) / bands;
       const uint64_t slot = frame_index_ % static_cast<uint64_t>(bands * every);
       const int band = static_cast<int>(slot / static_cast<uint64_t>(every));

@@ -54,7 +54,7 @@ struct RefreshPolicy {
   // that every pixel is measured afresh at least every rolling_period_frames frames (N): the
   // cost is spread over the frames instead of a full frame now and then. 0 disables.
   int rolling_period_frames = 20;
-  // One band of ceil(height / ceil(N / k)) rows every k frames. SGBM pays a fixed overhead per
+  // One band of ceil(height / floor(N / k)) rows every k frames. SGBM pays a fixed overhead per
   // box (its context rows and OpenCV's stripe restarts, ~20 rows): a 96-row band every 4th
   // frame costs less than four 24-row bands, at the price of a slower frame in four (head
   // scenario: mean EP time -4 to -10%, mean CPU -9%, bad-2 0.135 -> 0.132; ep README).

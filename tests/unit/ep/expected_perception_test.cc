@@ -82,7 +82,7 @@ TEST(ExpectedPerception, StillRigComputesOnceThenPredictsTheSameMap) {
 TEST(ExpectedPerception, TheRollingRefreshCoversTheImageOncePerPeriod) {
   const testing::SyntheticScene scene;
   const Frame f = Render(scene, 0, false);
-  for (const int every : {1, 4}) {
+  for (const int every : {1, 3, 4}) {
     EpParams p = Params();
     p.refresh.rolling_period_frames = 20;
     p.refresh.rolling_every_frames = every;
