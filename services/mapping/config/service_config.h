@@ -100,7 +100,8 @@ struct ServiceConfig {
   int64_t camera_info_wait_ns = 1'000'000'000;  // how long a frame may wait for CameraInfo
   int64_t joints_max_gap_ns = 200'000'000;  // joint readings must bracket the image this closely
   int64_t joints_wait_ns = 100'000'000;     // wait this long for a reading after the image stamp
-  size_t queue_capacity = 16;               // frames between ingest and pipeline (~0.5 s at 30 Hz)
+  size_t queue_capacity = 4;  // frames between ingest and pipeline: ~0.13 s at 30 Hz absorbs a
+                             // slow frame; more only adds latency once the pipeline falls behind
 
   // --- robot ---
   std::string mode = "auto";  // auto | head | static | mobile-base
