@@ -727,18 +727,21 @@ int RunCommand(int argc, char** argv) {
       j << ",\"map_views\":" << in_map << ",\"map_views_placed_by_motion\":" << by_motion;
     }
     if (!truth.walls.empty()) {
-      double visible_len = 0;
       const double cov = epmap::mobile_mapping::CoveredShare(truth.walls, segs, 0.5);
-      const double cov_vis = epmap::mobile_mapping::CoveredVisibleShare(
-          truth.walls, segs, 0.5, true_path, params.edges.max_range_m, &visible_len);
+      const auto visible =
+          epmap::mobile_mapping::VisibleParts(truth.walls, true_path, params.edges.max_range_m);
+      const double visible_len = epmap::mobile_mapping::TotalLength(visible);
+      const double cov_vis = epmap::mobile_mapping::CoveredShare(visible, segs, 0.5, 0.075);
+      // The most a map of the walls in view can cover: both faces of a wall lie within the
+      // tolerance of the face it sees.
+      const double coverable = epmap::mobile_mapping::CoveredShare(truth.walls, visible, 0.5);
       const double stray = 1.0 - epmap::mobile_mapping::CoveredShare(segs, truth.walls, 1.0);
       const double cov_kept = epmap::mobile_mapping::CoveredShare(truth.walls, kept, 0.5);
       const double stray_kept = 1.0 - epmap::mobile_mapping::CoveredShare(kept, truth.walls, 1.0);
       const double wall_len = epmap::mobile_mapping::TotalLength(truth.walls);
-      // A map of what the robot saw covers at most the wall in line of sight of the route (within
-      // the edge range); beyond that share only misplaced segments landing on unseen walls.
       j << ",\"wall_length_m\":" << FormatFixed(wall_len, 2)
         << ",\"wall_coverage_0p5m\":" << FormatFixed(cov, 4) << ",\"wall_coverage_target\":0.70"
+        << ",\"wall_coverage_upper_bound\":" << FormatFixed(coverable, 4)
         << ",\"visible_wall_share\":"
         << FormatFixed(wall_len > 0 ? visible_len / wall_len : kNaN, 4)
         << ",\"visible_wall_length_m\":" << FormatFixed(visible_len, 2)

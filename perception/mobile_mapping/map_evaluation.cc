@@ -80,16 +80,15 @@ double CoveredShare(const std::vector<Segment2>& reference, const std::vector<Se
   return total > 0 ? covered / total : 0.0;
 }
 
-double CoveredVisibleShare(const std::vector<Segment2>& reference,
-                           const std::vector<Segment2>& candidates, double tol,
-                           const std::vector<Eigen::Vector2d>& viewpoints, double max_range,
-                           double* visible_length, double step) {
+std::vector<Segment2> VisibleParts(const std::vector<Segment2>& reference,
+                                   const std::vector<Eigen::Vector2d>& viewpoints, double max_range,
+                                   double step) {
   // Viewpoints thinned to one per half metre: neighbours see the same walls.
   std::vector<Eigen::Vector2d> views;
   for (const auto& v : viewpoints) {
     if (views.empty() || (v - views.back()).norm() >= 0.5) views.push_back(v);
   }
-  double total = 0, covered = 0;
+  std::vector<Segment2> parts;
   for (const auto& s : SampleSegments(reference, step)) {
     bool visible = false;
     for (const auto& v : views) {
@@ -107,11 +106,21 @@ double CoveredVisibleShare(const std::vector<Segment2>& reference,
       }
     }
     if (!visible) continue;
-    total += s.weight;
-    if (Near(s.p, candidates, tol)) covered += s.weight;
+    const Segment2& seg = reference[s.segment];
+    const Eigen::Vector2d half = (seg.b - seg.a).normalized() * (0.5 * s.weight);
+    parts.push_back({s.p - half, s.p + half});
   }
-  if (visible_length) *visible_length = total;
-  return total > 0 ? covered / total : 0.0;
+  return parts;
+}
+
+double CoveredVisibleShare(const std::vector<Segment2>& reference,
+                           const std::vector<Segment2>& candidates, double tol,
+                           const std::vector<Eigen::Vector2d>& viewpoints, double max_range,
+                           double* visible_length, double step) {
+  const auto parts = VisibleParts(reference, viewpoints, max_range, step);
+  if (visible_length) *visible_length = TotalLength(parts);
+  // Each part is one sample long: sampled once, at the sample point it was made from.
+  return CoveredShare(parts, candidates, tol, 1.5 * step);
 }
 
 std::vector<uint8_t> RasteriseWalls(const occupancy::GridExport& g,

@@ -30,6 +30,13 @@ double CoveredVisibleShare(const std::vector<Segment2>& reference,
                            const std::vector<Eigen::Vector2d>& viewpoints, double max_range_m,
                            double* visible_length_m = nullptr, double step_m = 0.05);
 
+// The pieces of `reference` (one per step_m) that some viewpoint sees, as CoveredVisibleShare
+// decides it. CoveredShare(reference, VisibleParts(...), tol) is the most any map of the seen
+// walls can cover: a wall's hidden face lies within tol of its seen one (12 cm walls, 0.5 m).
+std::vector<Segment2> VisibleParts(const std::vector<Segment2>& reference,
+                                   const std::vector<Eigen::Vector2d>& viewpoints,
+                                   double max_range_m, double step_m = 0.05);
+
 double TotalLength(const std::vector<Segment2>& segments);
 
 struct GridScore {

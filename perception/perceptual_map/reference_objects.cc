@@ -13,7 +13,10 @@ void ClusteringParams::Validate() const {
   if (min_points < 2) throw std::invalid_argument("clustering: min_points must be >= 2");
   if (!(min_length_m >= 0)) throw std::invalid_argument("clustering: min_length_m must be >= 0");
   if (!(max_rms_m > 0)) throw std::invalid_argument("clustering: max_rms_m must be > 0");
-  if (!(radial_max_angle_rad >= 0) || !(radial_min_range_m >= 0)) {
+  if (!(max_rms_growth_per_m2 >= 0) || !std::isfinite(max_rms_growth_per_m2)) {
+    throw std::invalid_argument("clustering: max_rms_growth_per_m2 must be finite and >= 0");
+  }
+  if (!(radial_max_angle_rad >= 0) || !(radial_min_range_m >= 0) || !(radial_min_offset_m >= 0)) {
     throw std::invalid_argument("clustering: radial filter values must be >= 0");
   }
 }
@@ -74,12 +77,18 @@ std::vector<ReferenceObject> FitReferenceObjects(const std::vector<Eigen::Vector
     if (static_cast<int>(group.size()) < params.min_points) continue;
     ReferenceObject o;
     if (!FitLine(group, &o)) continue;
-    if (o.length() < params.min_length_m || o.rms_m > params.max_rms_m) continue;
     const Eigen::Vector2d mid = o.mid();
+    const double max_rms = params.max_rms_m + params.max_rms_growth_per_m2 * mid.squaredNorm();
+    if (o.length() < params.min_length_m || o.rms_m > max_rms) continue;
     if (params.radial_max_angle_rad > 0 && mid.norm() > params.radial_min_range_m &&
         o.length() > 0) {
-      const double c = std::abs(mid.normalized().dot((o.b - o.a).normalized()));
-      if (c > std::cos(params.radial_max_angle_rad)) continue;  // along the line of sight
+      const Eigen::Vector2d dir = (o.b - o.a).normalized();
+      const double c = std::abs(mid.normalized().dot(dir));
+      const double offset = std::abs(mid.x() * dir.y() - mid.y() * dir.x());  // origin to line
+      // Along the line of sight and through the view's origin: depth noise, not a surface.
+      if (c > std::cos(params.radial_max_angle_rad) && offset < params.radial_min_offset_m) {
+        continue;
+      }
     }
     objects.push_back(o);
   }

@@ -41,12 +41,23 @@ struct ClusteringParams {
   int min_points = 6;          // fewer points in a cell make no reference object
   double min_length_m = 0.05;  // paper 003: reference objects shorter than 5 cm are removed
   double max_rms_m = 0.10;     // a cell whose points do not lie on a line (clutter) is dropped
-  // Far away, stereo depth noise (growing with the square of the range) stretches a wall's
-  // points along the line of sight; a cell then fits a line pointing at the robot. Objects
-  // farther than radial_min_range_m whose line is within radial_max_angle_rad of the line of
-  // sight from the view's origin are dropped (0 disables).
+  // ... plus this much per square metre of the cell's range from the view's origin: stereo
+  // depth noise grows with the square of the range (z^2 sigma_d / (f b): 0.01 m/m^2 for the
+  // building's 320x240 rig at 0.3 px), so a far wall's points scatter more about their line.
+  // Four building runs: wall coverage +1.4 points (mean), stray length -0.4; any value from
+  // 0.002 to 0.01 gave the same maps.
+  double max_rms_growth_per_m2 = 0.005;
+  // Far away, stereo depth noise stretches a wall's points along the line of sight; a cell then
+  // fits a line pointing at the robot. Objects farther than radial_min_range_m whose line is
+  // within radial_max_angle_rad of the line of sight from the view's origin and passes within
+  // radial_min_offset_m of that origin are dropped (angle 0 disables). The offset keeps a
+  // corridor's walls seen far ahead: they run along the line of sight too, but at the
+  // corridor's half-width from the robot, where a stretched cell's line passes through it.
+  // Four building runs: wall coverage 48.5 -> 53.2 % (mean), stray length 8.3 -> 8.2 %
+  // (dropping the filter altogether: 52.5 %, stray 10.3 %).
   double radial_max_angle_rad = 0.35;  // 20 degrees
   double radial_min_range_m = 4.0;
+  double radial_min_offset_m = 0.6;
   void Validate() const;
 };
 

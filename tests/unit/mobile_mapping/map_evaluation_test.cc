@@ -34,6 +34,19 @@ TEST(MapEvaluation, VisibleWallsOnly) {
   EXPECT_EQ(visible, 0.0);
 }
 
+TEST(MapEvaluation, AWallsHiddenFaceIsCoverableFromItsSeenOne) {
+  // A 12 cm wall block seen from below: its far face (y = 1.12) is hidden, but lies within
+  // 0.5 m of the seen face, so a map of what is seen can cover it; the wall at y = 3 it hides
+  // cannot be covered by any map of the seen walls.
+  const std::vector<Segment2> walls = {
+      {{0, 1}, {10, 1}}, {{0, 1.12}, {10, 1.12}}, {{2, 3}, {8, 3}}};
+  const auto parts = mobile_mapping::VisibleParts(walls, {{5, 0}}, 20.0);
+  EXPECT_NEAR(mobile_mapping::TotalLength(parts), 10.0, 0.1);
+  for (const auto& p : parts) EXPECT_NEAR(p.a.y(), 1.0, 1e-9);
+  EXPECT_NEAR(mobile_mapping::CoveredShare(walls, parts, 0.5), 20.0 / 26.0, 0.01);
+  EXPECT_TRUE(mobile_mapping::VisibleParts(walls, {{5, 0}}, 0.5).empty());
+}
+
 TEST(MapEvaluation, GridIouAgainstRasterisedWalls) {
   occupancy::GridExport g;
   g.resolution_m = 0.1;

@@ -71,6 +71,40 @@ TEST(ReferenceObjects, FarLinesAlongTheLineOfSightAreDepthNoise) {
   EXPECT_EQ(perceptual_map::FitReferenceObjects(far, id, off).size(), 1u);
 }
 
+TEST(ReferenceObjects, AFarCorridorWallAlongTheLineOfSightIsKept) {
+  // A corridor's wall 6 m ahead runs within 20 degrees of the line of sight too (11 here), but
+  // 1.25 m to the side of the robot: a line that does not pass through the view's origin is a
+  // surface, not depth noise. With no offset allowed it is dropped, as before.
+  std::vector<Eigen::Vector2d> wall;
+  for (int i = 0; i < 20; ++i) wall.emplace_back(6.02 + 0.023 * i, 1.25 + (i % 2 ? 0.01 : -0.01));
+  const auto id = Eigen::Isometry2d::Identity();
+  const auto kept = perceptual_map::FitReferenceObjects(wall, id, {});
+  ASSERT_EQ(kept.size(), 1u);
+  EXPECT_NEAR(kept[0].mid().y(), 1.25, 0.02);
+  perceptual_map::ClusteringParams through_origin_only;
+  through_origin_only.radial_min_offset_m = 1e9;
+  EXPECT_TRUE(perceptual_map::FitReferenceObjects(wall, id, through_origin_only).empty());
+}
+
+TEST(ReferenceObjects, AFarWallMayScatterMoreThanANearOne) {
+  // The same wall piece, its points 0.115 m from its line: beyond max_rms_m near the
+  // robot, within it 7 m away, where stereo depth noise is larger (max_rms_growth_per_m2).
+  auto piece = [](double x0) {
+    std::vector<Eigen::Vector2d> pts;
+    for (int i = 0; i < 20; ++i) pts.emplace_back(x0 + (i % 2 ? 0.115 : -0.115), 0.02 + 0.0237 * i);
+    return pts;
+  };
+  const auto id = Eigen::Isometry2d::Identity();
+  EXPECT_TRUE(perceptual_map::FitReferenceObjects(piece(1.25), id, {}).empty());
+  EXPECT_EQ(perceptual_map::FitReferenceObjects(piece(7.25), id, {}).size(), 1u);
+  perceptual_map::ClusteringParams fixed;
+  fixed.max_rms_growth_per_m2 = 0;
+  EXPECT_TRUE(perceptual_map::FitReferenceObjects(piece(7.25), id, fixed).empty());
+  perceptual_map::ClusteringParams bad;
+  bad.max_rms_growth_per_m2 = -1;
+  EXPECT_THROW(perceptual_map::FitReferenceObjects(piece(7.25), id, bad), std::invalid_argument);
+}
+
 TEST(ReferenceObjects, CellsWithoutALineAreDropped) {
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> u(0.0, 0.49);
