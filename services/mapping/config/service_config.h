@@ -101,7 +101,7 @@ struct ServiceConfig {
   int64_t joints_max_gap_ns = 200'000'000;  // joint readings must bracket the image this closely
   int64_t joints_wait_ns = 100'000'000;     // wait this long for a reading after the image stamp
   size_t queue_capacity = 4;  // frames between ingest and pipeline: ~0.13 s at 30 Hz absorbs a
-                             // slow frame; more only adds latency once the pipeline falls behind
+                              // slow frame; more only adds latency once the pipeline falls behind
 
   // --- robot ---
   std::string mode = "auto";  // auto | head | static | mobile-base
