@@ -731,7 +731,7 @@ int RunCommand(int argc, char** argv) {
       const auto visible =
           epmap::mobile_mapping::VisibleParts(truth.walls, true_path, params.edges.max_range_m);
       const double visible_len = epmap::mobile_mapping::TotalLength(visible);
-      const double cov_vis = epmap::mobile_mapping::CoveredShare(visible, segs, 0.5, 0.075);
+      const double cov_vis = epmap::mobile_mapping::CoveredShare(visible, segs, 0.5);
       // The most a map of the walls in view can cover: both faces of a wall lie within the
       // tolerance of the face it sees.
       const double coverable = epmap::mobile_mapping::CoveredShare(truth.walls, visible, 0.5);

@@ -27,7 +27,8 @@ std::vector<Sample> SampleSegments(const std::vector<Segment2>& segments, double
     const Eigen::Vector2d d = segments[i].b - segments[i].a;
     const double len = d.norm();
     if (!(len > 0) || !std::isfinite(len)) continue;
-    const int n = std::max(1, static_cast<int>(std::ceil(len / step)));
+    // The tolerance keeps a piece exactly one step long (VisibleParts) at one sample.
+    const int n = std::max(1, static_cast<int>(std::ceil(len / step - 1e-9)));
     for (int k = 0; k < n; ++k) {
       out.push_back({segments[i].a + d * ((k + 0.5) / n), len / n, i});
     }
@@ -119,8 +120,8 @@ double CoveredVisibleShare(const std::vector<Segment2>& reference,
                            double* visible_length, double step) {
   const auto parts = VisibleParts(reference, viewpoints, max_range, step);
   if (visible_length) *visible_length = TotalLength(parts);
-  // Each part is one sample long: sampled once, at the sample point it was made from.
-  return CoveredShare(parts, candidates, tol, 1.5 * step);
+  // Each part is one step long: sampled once, at the sample point it was made from.
+  return CoveredShare(parts, candidates, tol, step);
 }
 
 std::vector<uint8_t> RasteriseWalls(const occupancy::GridExport& g,
