@@ -666,6 +666,25 @@ int RunCommand(int argc, char** argv) {
         if (gt) true_path.push_back(truth.T_start_gt * Eigen::Vector2d(gt->x, gt->y));
       }
     }
+    // The true cameras of the key frames on the floor plan: what the maps could have seen.
+    std::vector<epmap::mobile_mapping::PlanarView> true_cameras;
+    if (truth.has_pose && !p.data.gt_camera_pose.empty()) {
+      const auto& cams = p.data.gt_camera_pose;
+      // Half the horizontal field of view of the rectified left camera (centred principal point).
+      const double half_fov = std::atan(0.5 * p.camera.width / p.camera.fx);
+      for (const auto& f : p.key_frames) {
+        const int64_t stamp = p.data.frames[f.index].stamp_ns;
+        const auto it = std::lower_bound(
+            cams.begin(), cams.end(), stamp,
+            [](const epmap::dataset::PoseSample& c, int64_t t) { return c.stamp_ns < t; });
+        if (it == cams.end() || it->stamp_ns != stamp) continue;
+        const Eigen::Vector3d pos = it->pose.translation();
+        const Eigen::Vector3d axis = it->pose.linear().col(2);  // optical axis
+        if (axis.head<2>().norm() < 1e-6) continue;             // looking straight down or up
+        true_cameras.push_back({truth.T_start_gt * pos.head<2>(),
+                                truth.T_start_gt.linear() * axis.head<2>().normalized(), half_fov});
+      }
+    }
     WriteText(fs::path(out_dir) / "pmap.svg", Svg(maps.perceptual, truth, true_path));
     cv::imwrite((fs::path(out_dir) / "grid.png").string(), GridPicture(grid_export, truth, poses));
     if (!truth.walls.empty()) {
@@ -735,6 +754,15 @@ int RunCommand(int argc, char** argv) {
       // The most a map of the walls in view can cover: both faces of a wall lie within the
       // tolerance of the face it sees.
       const double coverable = epmap::mobile_mapping::CoveredShare(truth.walls, visible, 0.5);
+      // The same with the key frames' cameras and their field of view: what the map could
+      // have seen at all, and the most it can cover.
+      const auto seen = epmap::mobile_mapping::VisibleSeenParts(truth.walls, true_cameras,
+                                                                params.edges.max_range_m);
+      const double seen_len = epmap::mobile_mapping::TotalLength(seen);
+      const double cov_seen =
+          seen.empty() ? kNaN : epmap::mobile_mapping::CoveredShare(seen, segs, 0.5);
+      const double seen_bound =
+          seen.empty() ? kNaN : epmap::mobile_mapping::CoveredShare(truth.walls, seen, 0.5);
       const double stray = 1.0 - epmap::mobile_mapping::CoveredShare(segs, truth.walls, 1.0);
       const double cov_kept = epmap::mobile_mapping::CoveredShare(truth.walls, kept, 0.5);
       const double stray_kept = 1.0 - epmap::mobile_mapping::CoveredShare(kept, truth.walls, 1.0);
@@ -746,6 +774,9 @@ int RunCommand(int argc, char** argv) {
         << FormatFixed(wall_len > 0 ? visible_len / wall_len : kNaN, 4)
         << ",\"visible_wall_length_m\":" << FormatFixed(visible_len, 2)
         << ",\"visible_wall_coverage_0p5m\":" << FormatFixed(cov_vis, 4)
+        << ",\"seen_wall_length_m\":" << FormatFixed(seen_len, 2)
+        << ",\"seen_wall_coverage_0p5m\":" << FormatFixed(cov_seen, 4)
+        << ",\"wall_coverage_seen_bound\":" << FormatFixed(seen_bound, 4)
         << ",\"stray_share_1m\":" << FormatFixed(stray, 4) << ",\"stray_target\":0.15"
         << ",\"kept_wall_coverage_0p5m\":" << FormatFixed(cov_kept, 4)
         << ",\"kept_stray_share_1m\":" << FormatFixed(stray_kept, 4);

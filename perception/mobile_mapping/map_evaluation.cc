@@ -81,19 +81,25 @@ double CoveredShare(const std::vector<Segment2>& reference, const std::vector<Se
   return total > 0 ? covered / total : 0.0;
 }
 
-std::vector<Segment2> VisibleParts(const std::vector<Segment2>& reference,
-                                   const std::vector<Eigen::Vector2d>& viewpoints, double max_range,
-                                   double step) {
-  // Viewpoints thinned to one per half metre: neighbours see the same walls.
-  std::vector<Eigen::Vector2d> views;
-  for (const auto& v : viewpoints) {
-    if (views.empty() || (v - views.back()).norm() >= 0.5) views.push_back(v);
-  }
+namespace {
+
+// The sample pieces some view sees (field of view when the view has an axis, range, no other
+// reference segment in between).
+std::vector<Segment2> PartsSeenFrom(const std::vector<Segment2>& reference,
+                                    const std::vector<PlanarView>& views, double max_range,
+                                    double step) {
   std::vector<Segment2> parts;
   for (const auto& s : SampleSegments(reference, step)) {
     bool visible = false;
-    for (const auto& v : views) {
-      if ((s.p - v).norm() > max_range) continue;
+    for (const auto& view : views) {
+      const Eigen::Vector2d& v = view.position;
+      const Eigen::Vector2d ray = s.p - v;
+      const double range = ray.norm();
+      if (range > max_range) continue;
+      if (view.axis.squaredNorm() > 0 &&
+          ray.dot(view.axis) < range * view.axis.norm() * std::cos(view.half_fov_rad)) {
+        continue;
+      }
       // Stop just short of the wall so the wall itself does not occlude its own point.
       const Eigen::Vector2d q = s.p + (v - s.p).normalized() * 0.02;
       bool blocked = false;
@@ -112,6 +118,41 @@ std::vector<Segment2> VisibleParts(const std::vector<Segment2>& reference,
     parts.push_back({s.p - half, s.p + half});
   }
   return parts;
+}
+
+}  // namespace
+
+std::vector<Segment2> VisibleParts(const std::vector<Segment2>& reference,
+                                   const std::vector<Eigen::Vector2d>& viewpoints, double max_range,
+                                   double step) {
+  // Viewpoints thinned to one per half metre: neighbours see the same walls.
+  std::vector<PlanarView> views;
+  for (const auto& v : viewpoints) {
+    if (views.empty() || (v - views.back().position).norm() >= 0.5)
+      views.push_back({v, Eigen::Vector2d::Zero(), 0});
+  }
+  return PartsSeenFrom(reference, views, max_range, step);
+}
+
+std::vector<Segment2> VisibleSeenParts(const std::vector<Segment2>& reference,
+                                       const std::vector<PlanarView>& views, double max_range,
+                                       double step) {
+  std::vector<PlanarView> kept;
+  for (const auto& v : views) {
+    if (!v.position.allFinite() || !v.axis.allFinite()) continue;
+    if (!kept.empty()) {
+      const PlanarView& last = kept.back();
+      const bool same_axis = v.axis.squaredNorm() > 0 && last.axis.squaredNorm() > 0
+                                 ? v.axis.normalized().dot(last.axis.normalized()) > std::cos(0.1)
+                                 : v.axis.squaredNorm() == last.axis.squaredNorm();
+      if ((v.position - last.position).norm() < 0.25 && same_axis &&
+          v.half_fov_rad <= last.half_fov_rad) {
+        continue;
+      }
+    }
+    kept.push_back(v);
+  }
+  return PartsSeenFrom(reference, kept, max_range, step);
 }
 
 double CoveredVisibleShare(const std::vector<Segment2>& reference,

@@ -31,11 +31,29 @@ double CoveredVisibleShare(const std::vector<Segment2>& reference,
                            double* visible_length_m = nullptr, double step_m = 0.05);
 
 // The pieces of `reference` (one per step_m) that some viewpoint sees, as CoveredVisibleShare
-// decides it. CoveredShare(reference, VisibleParts(...), tol) is the most any map of the seen
-// walls can cover: a wall's hidden face lies within tol of its seen one (12 cm walls, 0.5 m).
+// decides it: looking all around, so CoveredShare(reference, VisibleParts(...), tol) is an
+// optimistic bound on what a map of the seen walls can cover (a wall's hidden face lies within
+// tol of its seen one: 12 cm walls, 0.5 m). VisibleSeenParts below adds the field of view.
 std::vector<Segment2> VisibleParts(const std::vector<Segment2>& reference,
                                    const std::vector<Eigen::Vector2d>& viewpoints,
                                    double max_range_m, double step_m = 0.05);
+
+// A camera on the floor plan: where it stands, where its optical axis points (a unit vector)
+// and half its horizontal field of view. An axis of zero length sees all around.
+struct PlanarView {
+  Eigen::Vector2d position = Eigen::Vector2d::Zero();
+  Eigen::Vector2d axis = Eigen::Vector2d::Zero();
+  double half_fov_rad = 0;
+};
+
+// The pieces of `reference` (one per step_m) that some view has in its field of view, within
+// max_range_m and with no other reference segment in between. Views closer than 0.25 m and
+// 0.1 rad to the previous one kept are skipped (they see the same walls). With the cameras of
+// the frames a map was built from, CoveredShare(reference, VisibleSeenParts(...), tol) is the
+// most that map can cover.
+std::vector<Segment2> VisibleSeenParts(const std::vector<Segment2>& reference,
+                                       const std::vector<PlanarView>& views, double max_range_m,
+                                       double step_m = 0.05);
 
 double TotalLength(const std::vector<Segment2>& segments);
 

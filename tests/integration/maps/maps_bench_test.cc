@@ -37,7 +37,8 @@ TEST(MapsBench, WritesTheMapsAndTheFigures) {
   for (const char* key :
        {"\"odometry_final_error_deg\":", "\"corrected_final_error_deg\":",
         "\"wall_coverage_0p5m\":", "\"visible_wall_share\":", "\"stray_share_1m\":", "\"iou\":",
-        "\"iou_upper_bound\":", "\"no_heading_correction\":", "\"per_key_frame_ms_median\":",
+        "\"iou_upper_bound\":", "\"wall_coverage_seen_bound\":", "\"seen_wall_coverage_0p5m\":",
+        "\"no_heading_correction\":", "\"per_key_frame_ms_median\":",
         "\"baseline_sgbm_ms_median\":"}) {
     EXPECT_NE(figures.find(key), std::string::npos) << key << " missing in " << figures;
   }

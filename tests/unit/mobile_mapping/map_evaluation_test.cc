@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "perception/mobile_mapping/map_evaluation.h"
 
 namespace epmap {
@@ -45,6 +47,37 @@ TEST(MapEvaluation, AWallsHiddenFaceIsCoverableFromItsSeenOne) {
   for (const auto& p : parts) EXPECT_NEAR(p.a.y(), 1.0, 1e-9);
   EXPECT_NEAR(mobile_mapping::CoveredShare(walls, parts, 0.5), 20.0 / 26.0, 0.01);
   EXPECT_TRUE(mobile_mapping::VisibleParts(walls, {{5, 0}}, 0.5).empty());
+}
+
+TEST(MapEvaluation, OnlyWhatACameraHadInItsFieldOfViewIsSeen) {
+  // A room 10 m x 8 m; a camera in its middle, (5, 4), looking east (+x) with a 30 degree half
+  // field of view sees the east wall within 5 tan(30 deg) = 2.89 m of its axis, none of the
+  // others.
+  const std::vector<Segment2> walls = {
+      {{0, 0}, {10, 0}}, {{10, 0}, {10, 8}}, {{10, 8}, {0, 8}}, {{0, 8}, {0, 0}}};
+  const double half_fov = 30.0 * M_PI / 180.0;
+  const mobile_mapping::PlanarView east{{5, 4}, {1, 0}, half_fov};
+  auto parts = mobile_mapping::VisibleSeenParts(walls, {east}, 20.0);
+  EXPECT_NEAR(mobile_mapping::TotalLength(parts), 2 * 5 * std::tan(half_fov), 0.1);
+  for (const auto& p : parts) EXPECT_NEAR(p.a.x(), 10.0, 1e-9);
+  // Panned to the north-east (45 degrees, so 15 to 75 degrees in view): the north wall from
+  // x = 5 + 4 / tan(75 deg) to its corner, the east wall from y = 4 + 5 tan(15 deg) up.
+  const double deg = M_PI / 180.0;
+  const double north = 10 - (5 + 4 / std::tan(75 * deg));
+  const double east_top = 8 - (4 + 5 * std::tan(15 * deg));
+  const mobile_mapping::PlanarView north_east{{5, 4}, Eigen::Vector2d(1, 1).normalized(), half_fov};
+  parts = mobile_mapping::VisibleSeenParts(walls, {north_east}, 20.0);
+  EXPECT_NEAR(mobile_mapping::TotalLength(parts), north + east_top, 0.1);
+  // Both views: their union; the same pose twice counts once.
+  const double east_union = 8 - (4 - 5 * std::tan(half_fov));
+  parts = mobile_mapping::VisibleSeenParts(walls, {east, north_east, north_east}, 20.0);
+  EXPECT_NEAR(mobile_mapping::TotalLength(parts), east_union + north, 0.1);
+  // A view without an axis looks all around, as VisibleParts does.
+  parts = mobile_mapping::VisibleSeenParts(walls, {{{5, 4}, Eigen::Vector2d::Zero(), 0}}, 20.0);
+  EXPECT_NEAR(mobile_mapping::TotalLength(parts), 36.0, 0.1);
+  // Out of range, or no views: nothing seen.
+  EXPECT_TRUE(mobile_mapping::VisibleSeenParts(walls, {east}, 4.0).empty());
+  EXPECT_TRUE(mobile_mapping::VisibleSeenParts(walls, {}, 20.0).empty());
 }
 
 TEST(MapEvaluation, GridIouAgainstRasterisedWalls) {
