@@ -4,6 +4,7 @@
 #include <cmath>
 #include <map>
 #include <stdexcept>
+#include <tuple>
 #include <utility>
 
 namespace epmap::perceptual_map {
@@ -15,6 +16,9 @@ void ClusteringParams::Validate() const {
   if (!(max_rms_m > 0)) throw std::invalid_argument("clustering: max_rms_m must be > 0");
   if (!(max_rms_growth_per_m2 >= 0) || !std::isfinite(max_rms_growth_per_m2)) {
     throw std::invalid_argument("clustering: max_rms_growth_per_m2 must be finite and >= 0");
+  }
+  if (!(far_from_range_m >= 0) || !(far_cell_size_m > 0)) {
+    throw std::invalid_argument("clustering: far_from_range_m must be >= 0, far_cell_size_m > 0");
   }
   if (!(radial_max_angle_rad >= 0) || !(radial_min_range_m >= 0) || !(radial_min_offset_m >= 0)) {
     throw std::invalid_argument("clustering: radial filter values must be >= 0");
@@ -64,12 +68,15 @@ std::vector<ReferenceObject> FitReferenceObjects(const std::vector<Eigen::Vector
                                                  const Eigen::Isometry2d& T_grid_view,
                                                  const ClusteringParams& params) {
   params.Validate();
-  std::map<std::pair<int64_t, int64_t>, std::vector<Eigen::Vector2d>> cells;
+  // Key: (far, column, row); far points go to the coarser grid of their own.
+  std::map<std::tuple<bool, int64_t, int64_t>, std::vector<Eigen::Vector2d>> cells;
   for (const auto& p : points) {
     if (!p.allFinite()) continue;
+    const bool far = params.far_from_range_m > 0 && p.norm() > params.far_from_range_m;
+    const double cell = far ? params.far_cell_size_m : params.cell_size_m;
     const Eigen::Vector2d g = T_grid_view * p;
-    const auto key = std::make_pair(static_cast<int64_t>(std::floor(g.x() / params.cell_size_m)),
-                                    static_cast<int64_t>(std::floor(g.y() / params.cell_size_m)));
+    const auto key = std::make_tuple(far, static_cast<int64_t>(std::floor(g.x() / cell)),
+                                     static_cast<int64_t>(std::floor(g.y() / cell)));
     cells[key].push_back(p);
   }
   std::vector<ReferenceObject> objects;

@@ -1,6 +1,9 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <random>
+#include <stdexcept>
 
 #include "perception/perceptual_map/reference_objects.h"
 
@@ -53,6 +56,47 @@ TEST(ReferenceObjects, GridClusteringMakesOneLinePerCellAndDropsShortOnes) {
   Eigen::Isometry2d T = Eigen::Isometry2d::Identity();
   T.translation() = Eigen::Vector2d(0.25, 0);
   EXPECT_EQ(perceptual_map::FitReferenceObjects(pts, T, p).size(), 5u);
+}
+
+TEST(ReferenceObjects, FarPointsAreGroupedInLargerCells) {
+  // A 2 m wall across the line of sight 9.5 m ahead, its points scattered 0.3 m across it (the
+  // depth noise of a far wall): in the 1 m cells used beyond 8 m, each cell holds the whole
+  // scatter and fits a line along the wall; the 0.5 m cells near the robot still cut a wall
+  // every half metre.
+  std::mt19937 rng(3);
+  std::normal_distribution<double> across(0, 0.3);
+  std::vector<Eigen::Vector2d> far;
+  for (int i = 0; i < 200; ++i) far.emplace_back(9.5 + across(rng), -0.995 + 0.01 * i);
+  perceptual_map::ClusteringParams p;
+  ASSERT_EQ(p.far_from_range_m, 8.0);
+  ASSERT_EQ(p.far_cell_size_m, 1.0);
+  auto objects = perceptual_map::FitReferenceObjects(far, Eigen::Isometry2d::Identity(), p);
+  std::sort(objects.begin(), objects.end(),
+            [](const auto& a, const auto& b) { return a.point_count > b.point_count; });
+  ASSERT_GE(objects.size(), 2u);
+  for (size_t k = 0; k < 2; ++k) {
+    const auto& o = objects[k];
+    EXPECT_GT(o.point_count, 80);
+    EXPECT_NEAR(o.mid().x(), 9.5, 0.15);
+    EXPECT_GT(o.length(), 0.9);
+    EXPECT_GT(std::abs((o.b - o.a).normalized().y()), std::cos(15.0 * M_PI / 180.0));
+  }
+  // Turned off: the 0.5 m cells split the scatter across the wall into slivers.
+  p.far_from_range_m = 0;
+  objects = perceptual_map::FitReferenceObjects(far, Eigen::Isometry2d::Identity(), p);
+  for (const auto& o : objects) EXPECT_LT(o.point_count, 80);
+
+  std::vector<Eigen::Vector2d> near;
+  for (int i = 0; i < 100; ++i) near.emplace_back(3.2, -0.99 + 0.02 * i);
+  EXPECT_EQ(perceptual_map::FitReferenceObjects(near, Eigen::Isometry2d::Identity(), {}).size(),
+            4u);
+
+  perceptual_map::ClusteringParams bad;
+  bad.far_cell_size_m = 0;
+  EXPECT_THROW(bad.Validate(), std::invalid_argument);
+  bad = {};
+  bad.far_from_range_m = -1;
+  EXPECT_THROW(bad.Validate(), std::invalid_argument);
 }
 
 TEST(ReferenceObjects, FarLinesAlongTheLineOfSightAreDepthNoise) {
