@@ -172,11 +172,8 @@ Frame LoadFrame(const Dataset& d, const Rig& rig, size_t i) {
   rig.rectifier.Rectify(Grey(l), Grey(r), out.left, out.right);
   out.gt_disparity = epmap::dataset::LoadGtDisparity(d, f.stamp_ns);
   out.gt_unexpected = epmap::dataset::LoadGtUnexpected(d, f.stamp_ns);
-  const auto pose = std::lower_bound(
-      d.gt_camera_pose.begin(), d.gt_camera_pose.end(), f.stamp_ns,
-      [](const epmap::dataset::PoseSample& p, int64_t stamp) { return p.stamp_ns < stamp; });
-  if (pose != d.gt_camera_pose.end() && pose->stamp_ns == f.stamp_ns) {
-    out.gt_T_world_cam0 = pose->pose;
+  if (const auto pose = epmap::dataset::PoseAt(d.gt_camera_pose, f.stamp_ns)) {
+    out.gt_T_world_cam0 = *pose;
   }
   for (auto m = std::lower_bound(
            d.gt_movers.begin(), d.gt_movers.end(), f.stamp_ns,

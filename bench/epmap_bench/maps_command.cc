@@ -668,19 +668,16 @@ int RunCommand(int argc, char** argv) {
     }
     // The true cameras of the key frames on the floor plan: what the maps could have seen.
     std::vector<epmap::mobile_mapping::PlanarView> true_cameras;
-    if (truth.has_pose && !p.data.gt_camera_pose.empty()) {
-      const auto& cams = p.data.gt_camera_pose;
+    if (truth.has_pose) {
       // Half the horizontal field of view of the rectified left camera (centred principal point).
       const double half_fov = std::atan(0.5 * p.camera.width / p.camera.fx);
       for (const auto& f : p.key_frames) {
-        const int64_t stamp = p.data.frames[f.index].stamp_ns;
-        const auto it = std::lower_bound(
-            cams.begin(), cams.end(), stamp,
-            [](const epmap::dataset::PoseSample& c, int64_t t) { return c.stamp_ns < t; });
-        if (it == cams.end() || it->stamp_ns != stamp) continue;
-        const Eigen::Vector3d pos = it->pose.translation();
-        const Eigen::Vector3d axis = it->pose.linear().col(2);  // optical axis
-        if (axis.head<2>().norm() < 1e-6) continue;             // looking straight down or up
+        const auto cam =
+            epmap::dataset::PoseAt(p.data.gt_camera_pose, p.data.frames[f.index].stamp_ns);
+        if (!cam) continue;
+        const Eigen::Vector3d pos = cam->translation();
+        const Eigen::Vector3d axis = cam->linear().col(2);  // optical axis
+        if (axis.head<2>().norm() < 1e-6) continue;         // looking straight down or up
         true_cameras.push_back({truth.T_start_gt * pos.head<2>(),
                                 truth.T_start_gt.linear() * axis.head<2>().normalized(), half_fov});
       }

@@ -362,6 +362,14 @@ std::optional<std::vector<double>> InterpolateJoints(const std::vector<JointSamp
   return out;
 }
 
+std::optional<Eigen::Isometry3d> PoseAt(const std::vector<PoseSample>& samples, int64_t stamp_ns) {
+  const auto it =
+      std::lower_bound(samples.begin(), samples.end(), stamp_ns,
+                       [](const PoseSample& p, int64_t stamp) { return p.stamp_ns < stamp; });
+  if (it == samples.end() || it->stamp_ns != stamp_ns) return std::nullopt;
+  return it->pose;
+}
+
 std::optional<PlanarPose> InterpolatePlanar(const std::vector<PlanarPose>& samples,
                                             int64_t stamp_ns, int64_t max_gap_ns) {
   if (samples.empty()) return std::nullopt;

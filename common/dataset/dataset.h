@@ -111,6 +111,10 @@ std::optional<std::vector<double>> InterpolateJoints(const std::vector<JointSamp
                                                      int64_t stamp_ns,
                                                      int64_t max_gap_ns = 100'000'000);
 
+// The pose recorded at exactly stamp_ns (samples sorted by stamp, one per frame, as
+// gt_camera_pose0 is written), or nullopt.
+std::optional<Eigen::Isometry3d> PoseAt(const std::vector<PoseSample>& samples, int64_t stamp_ns);
+
 // Planar pose interpolated at stamp_ns (angle interpolated on the circle).
 std::optional<PlanarPose> InterpolatePlanar(const std::vector<PlanarPose>& samples,
                                             int64_t stamp_ns, int64_t max_gap_ns = 500'000'000);

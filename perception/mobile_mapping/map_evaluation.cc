@@ -140,15 +140,10 @@ std::vector<Segment2> VisibleSeenParts(const std::vector<Segment2>& reference,
   std::vector<PlanarView> kept;
   for (const auto& v : views) {
     if (!v.position.allFinite() || !v.axis.allFinite()) continue;
-    if (!kept.empty()) {
-      const PlanarView& last = kept.back();
-      const bool same_axis = v.axis.squaredNorm() > 0 && last.axis.squaredNorm() > 0
-                                 ? v.axis.normalized().dot(last.axis.normalized()) > std::cos(0.1)
-                                 : v.axis.squaredNorm() == last.axis.squaredNorm();
-      if ((v.position - last.position).norm() < 0.25 && same_axis &&
-          v.half_fov_rad <= last.half_fov_rad) {
-        continue;
-      }
+    // Unit axes 0.1 apart are 0.1 rad apart; an all-around view differs from any other.
+    if (!kept.empty() && (v.position - kept.back().position).norm() < 0.25 &&
+        (v.axis - kept.back().axis).norm() < 0.1 && v.half_fov_rad <= kept.back().half_fov_rad) {
+      continue;
     }
     kept.push_back(v);
   }

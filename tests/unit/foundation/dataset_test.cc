@@ -73,5 +73,19 @@ TEST(Dataset, MissingFolderIsAClearError) {
   }
 }
 
+TEST(Dataset, PoseAtFindsTheSampleOfExactlyThatStamp) {
+  std::vector<dataset::PoseSample> poses(3);
+  for (int i = 0; i < 3; ++i) {
+    poses[i].stamp_ns = 100 * (i + 1);
+    poses[i].pose.translation() = Eigen::Vector3d(i, 0, 0);
+  }
+  const auto at = dataset::PoseAt(poses, 200);
+  ASSERT_TRUE(at.has_value());
+  EXPECT_EQ(at->translation().x(), 1.0);
+  EXPECT_FALSE(dataset::PoseAt(poses, 250).has_value());  // between samples: none
+  EXPECT_FALSE(dataset::PoseAt(poses, 400).has_value());
+  EXPECT_FALSE(dataset::PoseAt({}, 100).has_value());
+}
+
 }  // namespace
 }  // namespace epmap
