@@ -219,6 +219,7 @@ class BuildingScenario final : public Scenario {
     shot.ground_truth = ground_truth;
     shot.rectified = true;
     shot.baseline = (shot.T_world_cam0.inverse() * shot.T_world_cam1).translation().x();
+    shot.supersample = options().supersample > 0 ? options().supersample : 1;
     ShootStereo(shot, &f);
     // The renderer worked in the floor frame; report poses in the world frame.
     f.gt_T_world_cam0 = T_world_floor_ * f.gt_T_world_cam0;

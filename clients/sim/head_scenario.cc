@@ -127,6 +127,7 @@ class HeadScenario final : public Scenario {
     shot.rectified = !vergence_;
     // The true rig is rectified by construction; take its baseline from the chain itself.
     shot.baseline = (shot.T_world_cam0.inverse() * shot.T_world_cam1).translation().x();
+    shot.supersample = options().supersample > 0 ? options().supersample : 1;
     ShootStereo(shot, &f);
     return f;
   }

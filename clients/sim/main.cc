@@ -38,6 +38,7 @@ struct CommonFlags {
   bool disparity_every_frame = false;
   bool walker = false;
   int first_frame = 0;
+  int supersample = 0;
 
   void AddTo(CLI::App* app) {
     std::string names;
@@ -60,6 +61,9 @@ struct CommonFlags {
                   "and positions recorded)");
     app->add_option("--first-frame", first_frame,
                     "building: start at this frame of the route (e.g. 250: entering the corridor)");
+    app->add_option("--supersample", supersample,
+                    "light samples per pixel along each axis, odd: 3 gives silhouettes their "
+                    "sub-pixel position in the grey levels, as a real sensor does (default: 1)");
   }
 
   epmap::sim::ScenarioOptions Options() const {
@@ -75,6 +79,7 @@ struct CommonFlags {
     o.disparity_every_frame = disparity_every_frame;
     o.walker = walker;
     o.first_frame = first_frame;
+    o.supersample = supersample;
     return o;
   }
 };

@@ -75,9 +75,18 @@ std::unique_ptr<Scenario> MakeScenario(const ScenarioOptions& options) {
     throw std::invalid_argument("--first-frame " + std::to_string(options.first_frame) +
                                 " is negative");
   }
-  if (name == "eye-hand" && (options.width > 0 || options.frames > 0)) {
+  if (options.supersample < 0 || (options.supersample > 0 && options.supersample % 2 == 0)) {
+    throw std::invalid_argument("--supersample " + std::to_string(options.supersample) +
+                                " must be odd (1, 3, 5...: the middle sample is the pixel centre)");
+  }
+  if (options.supersample > 7) {
+    throw std::invalid_argument("--supersample " + std::to_string(options.supersample) +
+                                " is more than 7 (49 samples per pixel)");
+  }
+  if (name == "eye-hand" && (options.width > 0 || options.frames > 0 || options.supersample > 0)) {
     throw std::invalid_argument(
-        "eye-hand has no images: --size and --frames do not apply (20 ellipsoidal paths of 100 "
+        "eye-hand has no images: --size, --frames and --supersample do not apply (20 ellipsoidal "
+        "paths of 100 "
         "samples)");
   }
   if (name == "head") return MakeHeadScenario(options, false);

@@ -42,6 +42,7 @@ struct ScenarioOptions {
                                        // the look-around stops (to score the EP map driving)
   bool walker = false;  // building: a person walks to and fro along the first corridor
   int first_frame = 0;  // building: the run starts at this frame of the whole route
+  int supersample = 0;  // odd k: k x k light samples per pixel (StereoShot); 0 = the scenario's
   int64_t start_stamp_ns = kRecordStartStampNs;  // stamp of frame 0
 };
 

@@ -26,6 +26,12 @@ struct StereoShot {
   // Rectified rig: cam1 = cam0 shifted by `baseline` along cam0's x; fills gt_disparity.
   bool rectified = false;
   double baseline = 0;
+  // Odd k >= 1: each pixel's light is the mean of k x k samples spread over its area, as a
+  // sensor integrates it, so a silhouette (a wall's end, a door jamb, the floor line) lands
+  // between pixels with its sub-pixel position in the grey levels; with 1 sample per pixel it
+  // snaps to the pixel grid, which at a few pixels of disparity is metres of depth. The ground
+  // truth stays the exact value at the pixel centre (the middle sample, as k is odd).
+  int supersample = 1;
 };
 
 // Fills frame->left, right, gt_T_world_cam0/1, gt_T_cam0_cam1 and, with ground_truth,

@@ -6,6 +6,7 @@
 #include "clients/sim/random.h"
 #include "clients/sim/renderer.h"
 #include "clients/sim/sensor.h"
+#include "clients/sim/stereo_shot.h"
 #include "clients/sim/texture.h"
 #include "clients/sim/texture_library.h"
 
@@ -160,6 +161,47 @@ TEST(Sensor, NoiseHasTheRequestedSpreadAndTheGainScales) {
   EXPECT_EQ(cv::norm(a, b, cv::NORM_INF), 0);
   const cv::Mat c = Expose(radiance, 1.1, sensor, Rng(1, Stream::kImageNoise, 1));
   EXPECT_GT(cv::norm(a, c, cv::NORM_L1), 0);
+}
+
+// A plain quad (grey 228) on the background (128) whose left side projects to column 39.9: the
+// pixel spanning [39.5, 40.5] is 60 % covered.
+SimFrame ShootPlainQuad(int supersample) {
+  static const Scene scene = [] {
+    Scene s;
+    s.channels = 1;
+    s.textures.emplace_back(cv::Mat(8, 8, CV_8UC1, cv::Scalar(228)));
+    s.quads.push_back(FrontQuad(2.0 * (39.9 - 49.5) / 100.0, 0.6, -0.2, 0.2, 2.0));
+    return s;
+  }();
+  StereoShot shot;
+  shot.scene = &scene;
+  shot.camera = Camera();
+  shot.T_world_cam1.translation() = Eigen::Vector3d(0.1, 0, 0);
+  shot.sensor.blur_sigma_px = 0;
+  shot.sensor.noise_sigma = 0;
+  shot.rectified = true;
+  shot.baseline = 0.1;
+  shot.supersample = supersample;
+  SimFrame f;
+  ShootStereo(shot, &f);
+  return f;
+}
+
+TEST(StereoShot, SupersamplingPutsASilhouetteBetweenPixelsAndKeepsTheTruthAtTheCentre) {
+  const SimFrame one = ShootPlainQuad(1);
+  const SimFrame three = ShootPlainQuad(3);
+  // One sample per pixel: the silhouette snaps to the pixel grid (column 40 is all quad).
+  EXPECT_EQ(one.left.at<uint8_t>(40, 39), 128);
+  EXPECT_EQ(one.left.at<uint8_t>(40, 40), 228);
+  // 3 x 3 samples at 39.67, 40.00, 40.33: two of three columns see the quad.
+  EXPECT_NEAR(three.left.at<uint8_t>(40, 40), 128 + 100 * 2.0 / 3.0, 0.6);
+  EXPECT_EQ(three.left.at<uint8_t>(40, 39), 128);
+  EXPECT_EQ(three.left.at<uint8_t>(40, 41), 228);
+  // The ground truth is the pixel centre's, the same as without supersampling.
+  EXPECT_EQ(cv::norm(one.gt_disparity, three.gt_disparity, cv::NORM_INF), 0);
+  EXPECT_FLOAT_EQ(three.gt_disparity.at<float>(40, 40), 100 * 0.1 / 2.0);
+  EXPECT_TRUE(std::isnan(three.gt_disparity.at<float>(40, 39)));
+  EXPECT_THROW(ShootPlainQuad(2), std::invalid_argument);
 }
 
 }  // namespace

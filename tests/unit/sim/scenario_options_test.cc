@@ -52,8 +52,16 @@ TEST(ScenarioOptions, BadInputIsRefusedWithTheReason) {
   o.encoder_noise_scale = -1;
   EXPECT_NE(ErrorOf(o).find(">= 0"), std::string::npos);
   o.encoder_noise_scale = 1;
+  o.supersample = 2;
+  EXPECT_NE(ErrorOf(o).find("must be odd"), std::string::npos);
+  o.supersample = 9;
+  EXPECT_NE(ErrorOf(o).find("more than 7"), std::string::npos);
+  o.supersample = 0;
   o.name = "eye-hand";
   EXPECT_NE(ErrorOf(o).find("no images"), std::string::npos);
+  o.width = o.height = 0;
+  o.supersample = 3;  // alone, it is refused too
+  EXPECT_NE(ErrorOf(o).find("--supersample do not apply"), std::string::npos);
 }
 
 TEST(ScenarioOptions, ParsesImageSizes) {
