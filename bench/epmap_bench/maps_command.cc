@@ -571,6 +571,7 @@ int RunCommand(int argc, char** argv) {
   double floor_z = 0.0;
   int view_min = 0;
   int min_tracked = 0;
+  double refine_disparity = 0;
   size_t max_frames = 1'000'000;
   app.add_option("--dataset", dataset_path, "dataset folder with odometry0/")->required();
   app.add_option("--out", out_dir, "output folder (created)")->required();
@@ -585,6 +586,9 @@ int RunCommand(int argc, char** argv) {
   app.add_option("--min-tracked", min_tracked,
                  "perceptual map: a view joins the map when fewer of the previous view's objects "
                  "are still tracked (paper 003 Sec. III-C; 0 = the default)");
+  app.add_option("--refine-disparity", refine_disparity,
+                 "perceptual map: refine each edge disparity within +-PX over the matching window "
+                 "(EdgeStereoParams::refine_disparity_px; 0 = off, the default)");
   app.add_option("--max-key-frames", max_frames, "stop after this many key frames");
   app.add_flag("--no-variants", no_variants,
                "skip the runs without heading correction / without any correction");
@@ -601,6 +605,7 @@ int RunCommand(int argc, char** argv) {
     params.floor_z_in_base_m = floor_z;
     params.view_min_key_frames = view_min;  // 0: the mapper decides online, as in epmapd
     if (min_tracked != 0) params.perceptual.min_tracked = min_tracked;  // validated there
+    params.edges.refine_disparity_px = refine_disparity;
 
     const MotionMasks masks = no_motion_mask ? MotionMasks{} : RunExpectedPerception(p);
     const RunResult main = Run(p, params, true, masks);

@@ -27,6 +27,9 @@ void EdgeStereoParams::Validate() const {
   if (blur_sigma_px < 0) throw std::invalid_argument("edge stereo: blur_sigma_px must be >= 0");
   if (!(min_gradient > 0)) throw std::invalid_argument("edge stereo: min_gradient must be > 0");
   if (!(max_slope > 0)) throw std::invalid_argument("edge stereo: max_slope must be > 0");
+  if (!(refine_disparity_px >= 0 && refine_disparity_px <= 8)) {
+    throw std::invalid_argument("edge stereo: refine_disparity_px must be in [0, 8]");
+  }
   if (!(min_disparity_px > 0) || !(max_disparity_px > min_disparity_px)) {
     throw std::invalid_argument("edge stereo: need 0 < min_disparity_px < max_disparity_px");
   }
@@ -100,6 +103,45 @@ inline float Sample(const float* row, float u) {
   const int i = static_cast<int>(u);
   const float w = u - static_cast<float>(i);
   return row[i] * (1.0F - w) + row[i + 1] * w;
+}
+
+// The disparity within +-p.refine_disparity_px of `d` that minimises the sum of squared
+// differences between the left window around (u, r) and the right image sampled at x - d:
+// a scan at 1/20 px, then the vertex of the parabola through the best step and its neighbours.
+float RefineDisparity(const cv::Mat& fl, const cv::Mat& fr, float u, int r, float d,
+                      const EdgeStereoParams& p) {
+  const int ww = p.window_half_width, wh = p.window_half_height;
+  const int cl = static_cast<int>(std::lround(u));
+  const float last_column = static_cast<float>(fr.cols - 1);
+  constexpr float kStep = 0.05F;
+  const int steps = static_cast<int>(std::ceil(p.refine_disparity_px / kStep));
+  auto ssd = [&](float disparity) {
+    float sum = 0;
+    for (int dy = -wh; dy <= wh; ++dy) {
+      const float* lrow = fl.ptr<float>(r + dy);
+      const float* rrow = fr.ptr<float>(r + dy);
+      for (int dx = -ww; dx <= ww; ++dx) {
+        const float xr = static_cast<float>(cl + dx) - disparity;
+        if (xr < 0 || xr >= last_column) return std::numeric_limits<float>::infinity();
+        const float diff = lrow[cl + dx] - Sample(rrow, xr);
+        sum += diff * diff;
+      }
+    }
+    return sum;
+  };
+  std::vector<float> cost(static_cast<size_t>(2 * steps + 1));
+  size_t best = static_cast<size_t>(steps);
+  for (int k = -steps; k <= steps; ++k) {
+    const size_t i = static_cast<size_t>(k + steps);
+    cost[i] = ssd(d + kStep * static_cast<float>(k));
+    if (cost[i] < cost[best]) best = i;
+  }
+  if (best == 0 || best + 1 == cost.size()) return d;  // no minimum inside: keep the edges'
+  const float a = cost[best - 1], m = cost[best], b = cost[best + 1];
+  if (!std::isfinite(a) || !std::isfinite(b)) return d;  // the window left the image
+  const float denom = a - 2.0F * m + b;
+  const float offset = denom > 0 ? 0.5F * (a - b) / denom : 0.0F;
+  return d + kStep * (static_cast<float>(best) - static_cast<float>(steps) + offset);
 }
 
 }  // namespace
@@ -206,7 +248,8 @@ std::vector<EdgePoint> MatchEdgePoints(const cv::Mat& left, const cv::Mat& right
         ++s.rejected_weak;
         continue;
       }
-      const float d = L[i].u - R[static_cast<size_t>(j1)].u;
+      float d = L[i].u - R[static_cast<size_t>(j1)].u;
+      if (p.refine_disparity_px > 0) d = RefineDisparity(fl, fr, L[i].u, r, d, p);
       EdgePoint e;
       e.u = L[i].u;
       e.v = static_cast<float>(r);

@@ -77,5 +77,44 @@ TEST(MapsBench, WritesTheMapsAndTheFigures) {
   std::filesystem::remove_all(dir);
 }
 
+// `epmap-bench edges` on a short stretch of the building route with the true disparity of every
+// frame: both disparity estimates are scored in every range bin, and the edge points of this
+// world's textures are accurate to a fraction of a pixel. A run without truth is refused.
+TEST(EdgesBench, ScoresEdgeDisparitiesAgainstTheTruth) {
+  const auto dir = testing::FreshTempDir("edges-bench");
+  const std::string record = (testing::BinDir() / "epmap-sim").string() +
+                             " record --scenario building --frames 8 --disparity-every-frame "
+                             "--out " +
+                             (dir / "data").string() + " 2> /dev/null";
+  ASSERT_EQ(std::system(record.c_str()), 0) << record;
+  const auto bench = testing::BinDir() / "epmap-bench";
+  const std::string cmd = bench.string() + " edges --dataset " + (dir / "data").string() + " > " +
+                          (dir / "edges.json").string();
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  const std::string json = Slurp(dir / "edges.json");
+  EXPECT_NE(json.find("\"frames\":8,"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"disparity\":\"edge locations (default)\""), std::string::npos) << json;
+  EXPECT_NE(json.find("\"disparity\":\"refined over the window"), std::string::npos) << json;
+  // The near bin (>= 12 px) of the default: its median error is well under a pixel.
+  const size_t near = json.find("\">=12 (near)\"");
+  ASSERT_NE(near, std::string::npos) << json;
+  const size_t key = json.find("\"median_abs_error_px\":", near);
+  ASSERT_NE(key, std::string::npos);
+  const double median =
+      std::atof(json.c_str() + key + std::string("\"median_abs_error_px\":").size());
+  EXPECT_GT(median, 0.0) << json;
+  EXPECT_LT(median, 0.5) << json;
+
+  // The planar test world has no true disparity: a clear error.
+  testing::WriteRunDataset(testing::PlanarWorld(testing::RoomWalls()),
+                           testing::SimulateRun({{1.0, 1.0}, {2.0, 1.0}}, 0.0, {}), dir / "plain");
+  const std::string bad = bench.string() + " edges --dataset " + (dir / "plain").string() +
+                          " > /dev/null 2> " + (dir / "err.txt").string();
+  EXPECT_NE(std::system(bad.c_str()), 0);
+  EXPECT_NE(Slurp(dir / "err.txt").find("no gt_disparity0"), std::string::npos)
+      << Slurp(dir / "err.txt");
+  std::filesystem::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace epmap

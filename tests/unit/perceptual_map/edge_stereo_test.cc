@@ -1,7 +1,10 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cstdio>
 #include <numbers>
 #include <opencv2/imgproc.hpp>
+#include <vector>
 
 #include "perception/perceptual_map/edge_stereo.h"
 #include "tests/support/planar_world.h"
@@ -40,6 +43,64 @@ TEST(EdgeStereo, EdgePointsOfAWallAheadLieOnIt) {
   size_t near = 0;
   for (const auto& p : points) near += std::abs(p.p_cam.z() - 3.0) < 0.05;
   EXPECT_GT(near, points.size() * 95 / 100);
+}
+
+// A far, slanted surface with a smooth texture (a sum of sinusoids of 8-40 px periods, as the
+// simulator's band-limited textures) and sensor noise: its disparity d(u) = 4 + 0.03 (u - 160)
+// px. A smooth pattern's gradient peak is broad, so noise moves it; the window's grey levels
+// pin the disparity down better. Area-sampled: each pixel averages 8 samples across it.
+cv::Mat SmoothSlantedSurface(bool right_image) {
+  const auto profile = [](double x) {
+    double v = 0;
+    for (int k = 0; k < 12; ++k) {
+      const double period = 8.0 + 32.0 * testing::Unit(testing::Hash(7, k));
+      const double phase = 2 * std::numbers::pi * testing::Unit(testing::Hash(8, k));
+      v += 12.0 * std::sin(2 * std::numbers::pi * x / period + phase);
+    }
+    return 128 + v;
+  };
+  constexpr double kD0 = 4.0, kSlope = 0.03, kU0 = 160.0;
+  cv::Mat img(60, 320, CV_32FC1);
+  for (int u = 0; u < img.cols; ++u) {
+    double acc = 0;
+    for (int k = 0; k < 8; ++k) {
+      const double x = u - 0.5 + (k + 0.5) / 8;
+      // The right image at x shows the surface point that the left sees at x_l, x_l - d(x_l) = x.
+      acc += profile(right_image ? (x + kD0 - kU0 * kSlope) / (1 - kSlope) : x);
+    }
+    img.col(u).setTo(acc / 8);
+  }
+  cv::Mat noise(img.size(), CV_32FC1);
+  cv::RNG rng(right_image ? 2 : 1);
+  rng.fill(noise, cv::RNG::NORMAL, 0.0, 2.0);
+  cv::Mat out;
+  cv::Mat noisy = img + noise;
+  noisy.convertTo(out, CV_8UC1);
+  return out;
+}
+
+TEST(EdgeStereo, RefiningOverTheWindowMakesDisparitiesOfSmoothTexturesMoreAccurate) {
+  const cv::Mat left = SmoothSlantedSurface(false), right = SmoothSlantedSurface(true);
+  const auto cam = testing::BumblebeeLikeCamera();
+  const auto median_error = [&](double refine_px) {
+    perceptual_map::EdgeStereoParams p;
+    p.refine_disparity_px = refine_px;
+    std::vector<double> errors;
+    for (const auto& e : perceptual_map::MatchEdgePoints(left, right, cam, p)) {
+      errors.push_back(std::abs(e.disparity - (4.0 + 0.03 * (e.u - 160.0))));
+    }
+    EXPECT_GT(errors.size(), 300u);
+    std::nth_element(errors.begin(), errors.begin() + errors.size() / 2, errors.end());
+    return errors[errors.size() / 2];
+  };
+  const double edges = median_error(0);
+  const double refined = median_error(1.0);
+  std::printf("median |disparity error|: edge locations %.3f px, refined over the window %.3f px\n",
+              edges, refined);
+  EXPECT_LT(refined, 0.8 * edges);
+  perceptual_map::EdgeStereoParams bad;
+  bad.refine_disparity_px = -1;
+  EXPECT_THROW(perceptual_map::MatchEdgePoints(left, right, cam, bad), std::invalid_argument);
 }
 
 TEST(EdgeStereo, PointsBeyondTheRangeLimitAreDropped) {
