@@ -30,8 +30,9 @@ struct EdgeStereoParams {
   double max_slope = 3.0;  // |dI/dy| <= max_slope * |dI/dx|
   // > 0: after matching, the disparity is refined within +-this many pixels by minimising the
   // squared grey difference over the matching window, every pixel of it, not only the two
-  // gradient peaks. Off by default: on the building runs it makes edge disparities 17 % more
-  // accurate but the perceptual map covers less (`epmap-bench edges`, this folder's README).
+  // gradient peaks. Off by default: on the synthetic building it makes edge disparities 17-44 %
+  // more accurate yet the perceptual map covers less, and on the real pairs of ../shared/data it
+  // makes them less accurate (`epmap-bench edges`, this folder's README).
   double refine_disparity_px = 0.0;
   double min_disparity_px = 0.5;
   double max_disparity_px = 64.0;
