@@ -85,9 +85,8 @@ std::unique_ptr<Scenario> MakeScenario(const ScenarioOptions& options) {
   }
   if (name == "eye-hand" && (options.width > 0 || options.frames > 0 || options.supersample > 0)) {
     throw std::invalid_argument(
-        "eye-hand has no images: --size, --frames and --supersample do not apply (20 ellipsoidal "
-        "paths of 100 "
-        "samples)");
+        "eye-hand has no images: --size, --frames and --supersample do not apply (20 "
+        "ellipsoidal paths of 100 samples)");
   }
   if (name == "head") return MakeHeadScenario(options, false);
   if (name == "vergence") return MakeHeadScenario(options, true);
