@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "bench/epmap_bench/command_registry.h"
+#include "bench/epmap_bench/summary.h"
 #include "common/dataset/dataset.h"
 #include "perception/perceptual_map/edge_stereo.h"
 
@@ -22,7 +23,7 @@ namespace {
 
 namespace pm = epmap::perceptual_map;
 
-// The true disparity at (u, v) interpolated along the row, if the three columns around u all
+// The true disparity at (u, v) interpolated along the row, if the four columns around u all
 // have one and they differ by at most `max_spread` px (a smooth face, not a silhouette).
 bool SmoothTruthAt(const cv::Mat& gt, float u, float v, double max_spread, double* value) {
   const int r = static_cast<int>(std::lround(v));
@@ -47,44 +48,26 @@ struct ErrorBin {
   std::vector<double> errors;
 };
 
-double Quantile(std::vector<double> v, double q) {
-  if (v.empty()) return std::nan("");
-  std::sort(v.begin(), v.end());
-  return v[std::min(v.size() - 1, static_cast<size_t>(q * static_cast<double>(v.size())))];
-}
-
-// A JSON number, or null where there is none (an empty bin).
-std::string Number(double v, int decimals) {
-  if (!std::isfinite(v)) return "null";
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
-  return buf;
-}
-
 std::string BinJson(const ErrorBin& b, double f_b) {
-  std::vector<double> abs_err;
-  double sum = 0;
+  using epmap::bench::FormatFixed;
+  std::vector<double> abs_err, beyond_1px;
   for (double e : b.errors) {
     abs_err.push_back(std::abs(e));
-    sum += e;
+    beyond_1px.push_back(std::abs(e) > 1.0 ? 1.0 : 0.0);
   }
-  const double n = static_cast<double>(b.errors.size());
-  const double median = Quantile(abs_err, 0.5);
-  const auto beyond_1px =
-      std::count_if(abs_err.begin(), abs_err.end(), [](double e) { return e > 1.0; });
+  const double median = epmap::bench::Median(abs_err);
   // Depth error of the median disparity error at the bin's middle: dz = z^2 dd / (f b).
   const double mid_d = std::isfinite(b.hi_px) ? 0.5 * (b.lo_px + b.hi_px) : 1.5 * b.lo_px;
   const double z = f_b / mid_d;
-  return std::string("{\"true_disparity_px\":\"") + b.name +
-         "\",\"points\":" + std::to_string(b.errors.size()) +
-         ",\"median_abs_error_px\":" + Number(median, 4) +
-         ",\"p90_abs_error_px\":" + Number(Quantile(abs_err, 0.9), 4) +
-         ",\"median_error_px\":" + Number(Quantile(b.errors, 0.5), 4) +
-         ",\"mean_error_px\":" + Number(n > 0 ? sum / n : std::nan(""), 4) +
-         ",\"share_beyond_1px\":" +
-         Number(n > 0 ? static_cast<double>(beyond_1px) / n : std::nan(""), 4) +
-         ",\"at_range_m\":" + Number(z, 1) +
-         ",\"median_depth_error_there_m\":" + Number(z * z * median / f_b, 3) + "}";
+  return std::string("{\"true_disparity_px\":") + epmap::bench::JsonQuote(b.name) +
+         ",\"points\":" + std::to_string(b.errors.size()) +
+         ",\"median_abs_error_px\":" + FormatFixed(median, 4) +
+         ",\"p90_abs_error_px\":" + FormatFixed(epmap::bench::Percentile(abs_err, 0.9), 4) +
+         ",\"median_error_px\":" + FormatFixed(epmap::bench::Median(b.errors), 4) +
+         ",\"mean_error_px\":" + FormatFixed(epmap::bench::Mean(b.errors), 4) +
+         ",\"share_beyond_1px\":" + FormatFixed(epmap::bench::Mean(beyond_1px), 4) +
+         ",\"at_range_m\":" + FormatFixed(z, 1) +
+         ",\"median_depth_error_there_m\":" + FormatFixed(z * z * median / f_b, 3) + "}";
 }
 
 int Run(int argc, char** argv) {

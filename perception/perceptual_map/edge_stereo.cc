@@ -1,6 +1,7 @@
 #include "perception/perceptual_map/edge_stereo.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <opencv2/imgproc.hpp>
@@ -69,6 +70,13 @@ cv::Mat ToSmoothedFloat(const cv::Mat& image, double sigma) {
   return f;
 }
 
+// Where the vertex of the parabola through (-1, a), (0, m), (+1, b) lies, for m the extreme
+// of the three (a maximum or a minimum); 0 when they are collinear.
+float ParabolaVertex(float a, float m, float b) {
+  const float denom = a - 2.0F * m + b;
+  return denom != 0 ? std::clamp(0.5F * (a - b) / denom, -0.5F, 0.5F) : 0.0F;
+}
+
 std::vector<std::vector<RowEdge>> RowEdgesOfSmoothed(const cv::Mat& f, const EdgeStereoParams& p) {
   cv::Mat gx, gy;
   // Sobel 3x3 divided by 8: grey levels per pixel.
@@ -89,10 +97,7 @@ std::vector<std::vector<RowEdge>> RowEdgesOfSmoothed(const cv::Mat& f, const Edg
       // A maximum of |gx| along the row (ties broken to the left so a plateau yields one point).
       if (!(m >= a && m > b)) continue;
       // Parabola through the three magnitudes: its vertex is the sub-pixel edge location.
-      const float denom = a - 2.0F * m + b;
-      float offset = denom < 0 ? 0.5F * (a - b) / denom : 0.0F;
-      offset = std::clamp(offset, -0.5F, 0.5F);
-      out.push_back({static_cast<float>(c) + offset, x[c], std::abs(y[c]) / m});
+      out.push_back({static_cast<float>(c) + ParabolaVertex(a, m, b), x[c], std::abs(y[c]) / m});
     }
   }
   return rows;
@@ -114,7 +119,8 @@ float RefineDisparity(const cv::Mat& fl, const cv::Mat& fr, float u, int r, floa
   const int cl = static_cast<int>(std::lround(u));
   const float last_column = static_cast<float>(fr.cols - 1);
   constexpr float kStep = 0.05F;
-  const int steps = static_cast<int>(std::ceil(p.refine_disparity_px / kStep));
+  constexpr int kMaxSteps = 160;  // Validate() bounds refine_disparity_px by 8 px = 160 steps
+  const int steps = std::min(kMaxSteps, static_cast<int>(std::ceil(p.refine_disparity_px / kStep)));
   auto ssd = [&](float disparity) {
     float sum = 0;
     for (int dy = -wh; dy <= wh; ++dy) {
@@ -129,19 +135,18 @@ float RefineDisparity(const cv::Mat& fl, const cv::Mat& fr, float u, int r, floa
     }
     return sum;
   };
-  std::vector<float> cost(static_cast<size_t>(2 * steps + 1));
-  size_t best = static_cast<size_t>(steps);
-  for (int k = -steps; k <= steps; ++k) {
-    const size_t i = static_cast<size_t>(k + steps);
-    cost[i] = ssd(d + kStep * static_cast<float>(k));
+  std::array<float, 2 * kMaxSteps + 1> cost;  // on the stack: this runs per matched point
+  const size_t n = static_cast<size_t>(2 * steps + 1);
+  size_t best = 0;
+  for (size_t i = 0; i < n; ++i) {
+    cost[i] = ssd(d + kStep * (static_cast<float>(i) - static_cast<float>(steps)));
     if (cost[i] < cost[best]) best = i;
   }
-  if (best == 0 || best + 1 == cost.size()) return d;  // no minimum inside: keep the edges'
-  const float a = cost[best - 1], m = cost[best], b = cost[best + 1];
+  if (best == 0 || best + 1 == n) return d;  // no minimum inside: keep the edges'
+  const float a = cost[best - 1], b = cost[best + 1];
   if (!std::isfinite(a) || !std::isfinite(b)) return d;  // the window left the image
-  const float denom = a - 2.0F * m + b;
-  const float offset = denom > 0 ? 0.5F * (a - b) / denom : 0.0F;
-  return d + kStep * (static_cast<float>(best) - static_cast<float>(steps) + offset);
+  return d + kStep * (static_cast<float>(best) - static_cast<float>(steps) +
+                      ParabolaVertex(a, cost[best], b));
 }
 
 }  // namespace
