@@ -317,6 +317,43 @@ PoseErrors FinalErrors(const Prepared& p, const Truth& truth, const Eigen::Isome
   return e;
 }
 
+// The correlation's shifts checked against the truth: for each applied shift, the true position
+// error at the stop it corrected, before and after (the stop's pose in the final trajectory is the
+// one right after its shift: later shifts move only later poses).
+struct ShiftCheck {
+  size_t applied = 0, toward_truth = 0;
+  std::vector<double> error_before_m, error_after_m;
+};
+
+ShiftCheck CheckShifts(const Prepared& p, const Truth& truth,
+                       const std::vector<epmap::mobile_mapping::KeyFrameReport>& reports,
+                       const std::vector<epmap::localisation::PoseRecord>& poses) {
+  ShiftCheck c;
+  if (!truth.has_pose) return c;
+  size_t k = 0;  // pose record of the next accepted key frame
+  for (const auto& r : reports) {
+    if (!r.accepted) continue;
+    // The shift is reported by the key frame that closed the stop: the stop's last key frame is
+    // the accepted one before it.
+    if (r.shifted && k > 0 && k - 1 < poses.size()) {
+      const auto& stop = poses[k - 1];
+      const auto gt = epmap::dataset::InterpolatePlanar(p.data.gt_base_pose, stop.stamp_ns);
+      if (gt) {
+        const Eigen::Vector2d truth_xy =
+            (truth.T_start_gt * MakePose(gt->x, gt->y, gt->theta)).translation();
+        const Eigen::Vector2d after = stop.T_world_base.translation() - truth_xy;
+        const Eigen::Vector2d before = after - r.shift_m;
+        ++c.applied;
+        c.toward_truth += after.norm() < before.norm();
+        c.error_before_m.push_back(before.norm());
+        c.error_after_m.push_back(after.norm());
+      }
+    }
+    ++k;
+  }
+  return c;
+}
+
 std::vector<Segment2> ToSegments(const std::vector<epmap::perceptual_map::MapSegment>& segments) {
   std::vector<Segment2> out;
   for (const auto& s : segments) out.push_back({s.a, s.b});
@@ -567,7 +604,7 @@ int RunCommand(int argc, char** argv) {
   CLI::App app("Perceptual map + occupancy grid + heading correction over a mobile-base dataset",
                argv[0]);
   std::string dataset_path, out_dir, compare_path;
-  bool json = false, no_variants = false, no_motion_mask = false;
+  bool json = false, no_variants = false, no_motion_mask = false, no_map_correlation = false;
   double floor_z = 0.0;
   int view_min = 0;
   int min_tracked = 0;
@@ -592,6 +629,9 @@ int RunCommand(int argc, char** argv) {
   app.add_option("--max-key-frames", max_frames, "stop after this many key frames");
   app.add_flag("--no-variants", no_variants,
                "skip the runs without heading correction / without any correction");
+  app.add_flag("--no-map-correlation", no_map_correlation,
+               "heading correction only: no local/global map correlation at the stops (paper 002, "
+               "Sec. 4), to measure what the correlation adds");
   app.add_flag("--no-motion-mask", no_motion_mask,
                "do not run the EP before the maps (epmapd leaves what the EP finds moving on its "
                "own out of the maps)");
@@ -606,6 +646,7 @@ int RunCommand(int argc, char** argv) {
     params.view_min_key_frames = view_min;  // 0: the mapper decides online, as in epmapd
     if (min_tracked != 0) params.perceptual.min_tracked = min_tracked;  // validated there
     params.edges.refine_disparity_px = refine_disparity;
+    params.map_correlation = !no_map_correlation;
 
     const MotionMasks masks = no_motion_mask ? MotionMasks{} : RunExpectedPerception(p);
     const RunResult main = Run(p, params, true, masks);
@@ -737,6 +778,17 @@ int RunCommand(int argc, char** argv) {
                                          : "null")
       << "},\"position\":{\"odometry_final_error_m\":" << FormatFixed(odo.position_m, 3)
       << ",\"corrected_final_error_m\":" << FormatFixed(cor.position_m, 3) << "}";
+    {
+      const ShiftCheck sc = CheckShifts(p, truth, main.reports, poses);
+      j << ",\"correlation\":{\"enabled\":" << (params.map_correlation ? "true" : "false")
+        << ",\"shifts_applied\":" << sc.applied;
+      if (truth.has_pose && sc.applied > 0) {
+        j << ",\"shifts_toward_truth\":" << sc.toward_truth
+          << ",\"error_before_shift_m_median\":" << FormatFixed(Median(sc.error_before_m), 4)
+          << ",\"error_after_shift_m_median\":" << FormatFixed(Median(sc.error_after_m), 4);
+      }
+      j << "}";
+    }
 
     const auto segs = ToSegments(maps.perceptual.segments);
     const auto kept = ToSegments(maps.perceptual.kept_segments);

@@ -39,7 +39,7 @@ TEST(MapsBench, WritesTheMapsAndTheFigures) {
         "\"wall_coverage_0p5m\":", "\"visible_wall_share\":", "\"stray_share_1m\":", "\"iou\":",
         "\"iou_upper_bound\":", "\"wall_coverage_seen_bound\":", "\"seen_wall_coverage_0p5m\":",
         "\"no_heading_correction\":", "\"per_key_frame_ms_median\":",
-        "\"baseline_sgbm_ms_median\":"}) {
+        "\"baseline_sgbm_ms_median\":", "\"correlation\":{\"enabled\":true,\"shifts_applied\":"}) {
     EXPECT_NE(figures.find(key), std::string::npos) << key << " missing in " << figures;
   }
   EXPECT_EQ(figures.find("null"), std::string::npos) << figures;
@@ -68,6 +68,18 @@ TEST(MapsBench, WritesTheMapsAndTheFigures) {
   ASSERT_EQ(std::system(again.c_str()), 0) << again;
   EXPECT_NE(Slurp(dir / "figures2.txt").find("\"shape_similarity\":1.0000"), std::string::npos)
       << Slurp(dir / "figures2.txt");
+
+  // Heading correction alone: no correlation ran, no shift was applied.
+  const std::string no_corr = bench.string() +
+                              " maps --no-variants --no-map-correlation --dataset " +
+                              (dir / "data").string() + " --out " + (dir / "out4").string() +
+                              " --json > " + (dir / "figures4.txt").string();
+  ASSERT_EQ(std::system(no_corr.c_str()), 0) << no_corr;
+  const std::string figures4 = Slurp(dir / "figures4.txt");
+  EXPECT_NE(figures4.find("\"correlation\":{\"enabled\":false,\"shifts_applied\":0}"),
+            std::string::npos)
+      << figures4;
+  EXPECT_NE(figures4.find("\"registrations\":0,"), std::string::npos) << figures4;
 
   // A folder that is not a mobile-base dataset is refused with a reason.
   const std::string bad = bench.string() + " maps --dataset " + dir.string() + " --out " +
