@@ -75,10 +75,14 @@ int Run(int argc, char** argv) {
   std::string dataset_path;
   size_t max_frames = 200;
   double max_spread = 0.25;
+  double max_range = pm::EdgeStereoParams{}.max_range_m;
   app.add_option("--dataset", dataset_path, "rectified dataset with gt_disparity0/")->required();
   app.add_option("--max-frames", max_frames, "score at most this many frames with ground truth");
   app.add_option("--max-spread", max_spread,
                  "true disparity may vary by this much (px) over 4 columns around a scored point");
+  app.add_option("--max-range", max_range,
+                 "drop edge points beyond this range (m), as the perceptual map does at 20 m; a "
+                 "larger value shows the far bin without the selection the cut makes");
   CLI11_PARSE(app, argc, argv);
   try {
     const auto d = epmap::dataset::Load(dataset_path);
@@ -90,6 +94,7 @@ int Run(int argc, char** argv) {
     struct Method {
       const char* name;
       double refine_px;
+      bool reject_contested;
       std::vector<ErrorBin> bins;
       size_t matched = 0;
     };
@@ -98,8 +103,9 @@ int Run(int argc, char** argv) {
                                         {"6-12", 6, 12, {}},
                                         {">=12 (near)", 12, INFINITY, {}}};
     std::vector<Method> methods = {
-        {"edge locations (default)", 0.0, bins, 0},
-        {"refined over the window (refine_disparity_px 1)", 1.0, bins, 0}};
+        {"edge locations (default)", 0.0, false, bins, 0},
+        {"refined over the window (refine_disparity_px 1)", 1.0, false, bins, 0},
+        {"contested matches rejected (reject_contested)", 0.0, true, bins, 0}};
     size_t frames = 0;
     for (const auto& f : d.frames) {
       if (frames >= max_frames) break;
@@ -111,6 +117,8 @@ int Run(int argc, char** argv) {
       for (auto& m : methods) {
         pm::EdgeStereoParams p;
         p.refine_disparity_px = m.refine_px;
+        p.max_range_m = max_range;
+        p.reject_contested = m.reject_contested;
         const auto points = pm::MatchEdgePoints(l, r, camera, p);
         m.matched += points.size();
         for (const auto& pt : points) {

@@ -605,6 +605,7 @@ int RunCommand(int argc, char** argv) {
                argv[0]);
   std::string dataset_path, out_dir, compare_path;
   bool json = false, no_variants = false, no_motion_mask = false, no_map_correlation = false;
+  bool reject_contested = false;
   double floor_z = 0.0;
   int view_min = 0;
   int min_tracked = 0;
@@ -629,6 +630,9 @@ int RunCommand(int argc, char** argv) {
   app.add_option("--max-key-frames", max_frames, "stop after this many key frames");
   app.add_flag("--no-variants", no_variants,
                "skip the runs without heading correction / without any correction");
+  app.add_flag("--reject-contested", reject_contested,
+               "perceptual map: drop edge matches whose right edge two left edges claim "
+               "(EdgeStereoParams::reject_contested; off by default)");
   app.add_flag("--no-map-correlation", no_map_correlation,
                "heading correction only: no local/global map correlation at the stops (paper 002, "
                "Sec. 4), to measure what the correlation adds");
@@ -647,6 +651,7 @@ int RunCommand(int argc, char** argv) {
     if (min_tracked != 0) params.perceptual.min_tracked = min_tracked;  // validated there
     params.edges.refine_disparity_px = refine_disparity;
     params.map_correlation = !no_map_correlation;
+    params.edges.reject_contested = reject_contested;
 
     const MotionMasks masks = no_motion_mask ? MotionMasks{} : RunExpectedPerception(p);
     const RunResult main = Run(p, params, true, masks);

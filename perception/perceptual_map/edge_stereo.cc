@@ -231,6 +231,15 @@ std::vector<EdgePoint> MatchEdgePoints(const cv::Mat& left, const cv::Mat& right
         }
       }
     }
+    // How many left edges pick each right edge as their best acceptable match.
+    std::vector<int> claims(R.size(), 0);
+    if (p.reject_contested) {
+      for (size_t i = 0; i < L.size(); ++i) {
+        const float* row_cost = &cost[i * R.size()];
+        const auto best = std::min_element(row_cost, row_cost + R.size());
+        if (*best <= p.max_mean_abs_diff) ++claims[static_cast<size_t>(best - row_cost)];
+      }
+    }
     for (size_t i = 0; i < L.size(); ++i) {
       float b1 = inf, b2 = inf;
       int j1 = -1;
@@ -248,7 +257,8 @@ std::vector<EdgePoint> MatchEdgePoints(const cv::Mat& left, const cv::Mat& right
       const bool weak = b1 > p.max_mean_abs_diff ||
                         (b2 < inf && b1 > static_cast<float>(p.uniqueness) * b2) ||
                         (p.left_right_check &&
-                         best_left_of_right[static_cast<size_t>(j1)] != static_cast<int>(i));
+                         best_left_of_right[static_cast<size_t>(j1)] != static_cast<int>(i)) ||
+                        claims[static_cast<size_t>(j1)] > 1;
       if (weak) {
         ++s.rejected_weak;
         continue;

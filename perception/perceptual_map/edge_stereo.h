@@ -42,7 +42,13 @@ struct EdgeStereoParams {
   double uniqueness = 0.85;         // weak matches: best cost > uniqueness * second best
   double max_gradient_ratio = 2.0;  // |gx| of the two points may differ at most by this factor
   bool left_right_check = true;     // keep only mutual best matches
-  double max_range_m = 20.0;        // paper 003: points beyond 2000 cm are dropped
+  // Weak matches: a right edge that two or more left edges pick as their best acceptable match
+  // is contested, and none of them is kept. Repeated structure on a plain wall (the two jambs of
+  // a door) matches across: the mutual check keeps the better-looking pair even when it is the
+  // wrong one, a point metres nearer than the wall. Off by default (see this folder's README:
+  // fewer gross errors, the maps' figures within their spread).
+  bool reject_contested = false;
+  double max_range_m = 20.0;  // paper 003: points beyond 2000 cm are dropped
   void Validate() const;
 };
 

@@ -117,6 +117,25 @@ TEST(EdgesBench, ScoresEdgeDisparitiesAgainstTheTruth) {
   EXPECT_GT(median, 0.0) << json;
   EXPECT_LT(median, 0.5) << json;
 
+  // The range cut of the perceptual map (20 m) is applied before scoring: a 5 m cut keeps fewer
+  // matched edge points.
+  const auto matched = [](const std::string& j) {
+    const size_t key = j.find("\"matched\":");
+    return key == std::string::npos ? -1L : std::atol(j.c_str() + key + 10);
+  };
+  const std::string cut = bench.string() + " edges --max-range 5 --dataset " +
+                          (dir / "data").string() + " > " + (dir / "edges5.json").string();
+  ASSERT_EQ(std::system(cut.c_str()), 0) << cut;
+  const std::string json5 = Slurp(dir / "edges5.json");
+  EXPECT_GT(matched(json5), 0) << json5;
+  EXPECT_LT(matched(json5), matched(json)) << json5;
+  const std::string no_range = bench.string() + " edges --max-range 0 --dataset " +
+                               (dir / "data").string() + " > /dev/null 2> " +
+                               (dir / "err0.txt").string();
+  EXPECT_NE(std::system(no_range.c_str()), 0);
+  EXPECT_NE(Slurp(dir / "err0.txt").find("max_range_m must be > 0"), std::string::npos)
+      << Slurp(dir / "err0.txt");
+
   // The planar test world has no true disparity: a clear error.
   testing::WriteRunDataset(testing::PlanarWorld(testing::RoomWalls()),
                            testing::SimulateRun({{1.0, 1.0}, {2.0, 1.0}}, 0.0, {}), dir / "plain");

@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <numbers>
 #include <opencv2/imgproc.hpp>
+#include <tuple>
 #include <vector>
 
 #include "perception/perceptual_map/edge_stereo.h"
@@ -43,6 +44,33 @@ TEST(EdgeStereo, EdgePointsOfAWallAheadLieOnIt) {
   size_t near = 0;
   for (const auto& p : points) near += std::abs(p.p_cam.z() - 3.0) < 0.05;
   EXPECT_GT(near, points.size() * 95 / 100);
+}
+
+// Two door jambs on a plain wall, 4 px disparity: the left image's second jamb looks exactly like
+// the right image's first (the true first jamb is a shade darker, the true second one a pixel
+// wider, its side face in view). The mutual check then pairs the second jamb with the first, a
+// point 11 times nearer than the wall. With reject_contested the right edges both left jambs
+// claim are dropped, and no such point is left.
+TEST(EdgeStereo, RejectingContestedMatchesDropsTheJambMatchedAcrossTheDoor) {
+  const auto image = [](std::initializer_list<std::tuple<int, int, uint8_t>> bars) {
+    cv::Mat img(20, 200, CV_8UC1, cv::Scalar(180));
+    for (const auto& [from, to, grey] : bars) img.colRange(from, to).setTo(grey);
+    return img;
+  };
+  const cv::Mat left = image({{100, 104, 60}, {140, 144, 64}});
+  const cv::Mat right = image({{96, 100, 64}, {135, 140, 64}});
+  const auto cam = testing::BumblebeeLikeCamera();
+  const auto farthest_disparity = [&](bool reject_contested) {
+    perceptual_map::EdgeStereoParams p;
+    p.reject_contested = reject_contested;
+    float d = 0;
+    for (const auto& e : perceptual_map::MatchEdgePoints(left, right, cam, p)) {
+      d = std::max(d, e.disparity);
+    }
+    return d;
+  };
+  EXPECT_GT(farthest_disparity(false), 40.0F);  // the jamb matched across the door
+  EXPECT_LT(farthest_disparity(true), 10.0F);
 }
 
 // A far, slanted surface with a smooth texture (a sum of sinusoids of 8-40 px periods, as the
