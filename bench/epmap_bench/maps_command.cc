@@ -306,12 +306,20 @@ struct PoseErrors {
   double position_m = std::nan("");
 };
 
+// The true base pose at a stamp in the map's world (the robot's start pose), when known.
+std::optional<Eigen::Isometry2d> TrueBasePose(const Prepared& p, const Truth& truth,
+                                              int64_t stamp) {
+  const auto gt = epmap::dataset::InterpolatePlanar(p.data.gt_base_pose, stamp);
+  if (!truth.has_pose || !gt) return std::nullopt;
+  return truth.T_start_gt * MakePose(gt->x, gt->y, gt->theta);
+}
+
 PoseErrors FinalErrors(const Prepared& p, const Truth& truth, const Eigen::Isometry2d& estimate,
                        int64_t stamp) {
   PoseErrors e;
-  const auto gt = epmap::dataset::InterpolatePlanar(p.data.gt_base_pose, stamp);
-  if (!truth.has_pose || !gt) return e;
-  const Eigen::Isometry2d T = truth.T_start_gt * MakePose(gt->x, gt->y, gt->theta);
+  const auto truth_pose = TrueBasePose(p, truth, stamp);
+  if (!truth_pose) return e;
+  const Eigen::Isometry2d& T = *truth_pose;
   e.heading_deg = std::abs(WrapAngle(HeadingOf(estimate) - HeadingOf(T))) * kDeg;
   e.position_m = (estimate.translation() - T.translation()).norm();
   return e;
@@ -329,7 +337,6 @@ ShiftCheck CheckShifts(const Prepared& p, const Truth& truth,
                        const std::vector<epmap::mobile_mapping::KeyFrameReport>& reports,
                        const std::vector<epmap::localisation::PoseRecord>& poses) {
   ShiftCheck c;
-  if (!truth.has_pose) return c;
   size_t k = 0;  // pose record of the next accepted key frame
   for (const auto& r : reports) {
     if (!r.accepted) continue;
@@ -337,11 +344,8 @@ ShiftCheck CheckShifts(const Prepared& p, const Truth& truth,
     // the accepted one before it.
     if (r.shifted && k > 0 && k - 1 < poses.size()) {
       const auto& stop = poses[k - 1];
-      const auto gt = epmap::dataset::InterpolatePlanar(p.data.gt_base_pose, stop.stamp_ns);
-      if (gt) {
-        const Eigen::Vector2d truth_xy =
-            (truth.T_start_gt * MakePose(gt->x, gt->y, gt->theta)).translation();
-        const Eigen::Vector2d after = stop.T_world_base.translation() - truth_xy;
+      if (const auto truth_pose = TrueBasePose(p, truth, stop.stamp_ns)) {
+        const Eigen::Vector2d after = stop.T_world_base.translation() - truth_pose->translation();
         const Eigen::Vector2d before = after - r.shift_m;
         ++c.applied;
         c.toward_truth += after.norm() < before.norm();

@@ -184,6 +184,7 @@ std::vector<EdgePoint> MatchEdgePoints(const cv::Mat& left, const cv::Mat& right
   const float window_pixels = static_cast<float>((2 * ww + 1) * (2 * wh + 1));
 
   std::vector<float> cost;
+  std::vector<int> claims;
   for (int r = 0; r < fl.rows; ++r) {
     const auto& L = left_rows[static_cast<size_t>(r)];
     const auto& R = right_rows[static_cast<size_t>(r)];
@@ -231,9 +232,11 @@ std::vector<EdgePoint> MatchEdgePoints(const cv::Mat& left, const cv::Mat& right
         }
       }
     }
-    // How many left edges pick each right edge as their best acceptable match.
-    std::vector<int> claims(R.size(), 0);
+    // How many left edges pick each right edge as their best acceptable match (only when asked:
+    // this runs for every row of every key frame).
+    claims.clear();
     if (p.reject_contested) {
+      claims.assign(R.size(), 0);
       for (size_t i = 0; i < L.size(); ++i) {
         const float* row_cost = &cost[i * R.size()];
         const auto best = std::min_element(row_cost, row_cost + R.size());
@@ -258,7 +261,7 @@ std::vector<EdgePoint> MatchEdgePoints(const cv::Mat& left, const cv::Mat& right
                         (b2 < inf && b1 > static_cast<float>(p.uniqueness) * b2) ||
                         (p.left_right_check &&
                          best_left_of_right[static_cast<size_t>(j1)] != static_cast<int>(i)) ||
-                        claims[static_cast<size_t>(j1)] > 1;
+                        (p.reject_contested && claims[static_cast<size_t>(j1)] > 1);
       if (weak) {
         ++s.rejected_weak;
         continue;

@@ -120,8 +120,9 @@ TEST(EdgesBench, ScoresEdgeDisparitiesAgainstTheTruth) {
   // The range cut of the perceptual map (20 m) is applied before scoring: a 5 m cut keeps fewer
   // matched edge points.
   const auto matched = [](const std::string& j) {
-    const size_t key = j.find("\"matched\":");
-    return key == std::string::npos ? -1L : std::atol(j.c_str() + key + 10);
+    const std::string name = "\"matched\":";
+    const size_t key = j.find(name);
+    return key == std::string::npos ? -1L : std::atol(j.c_str() + key + name.size());
   };
   const std::string cut = bench.string() + " edges --max-range 5 --dataset " +
                           (dir / "data").string() + " > " + (dir / "edges5.json").string();
