@@ -2,24 +2,38 @@
 # The main job: installs the dependencies, builds, then runs epmapd on the built-in synthetic
 # stereo head (epmap-sim publish --scenario head) and a client (epmapctl) that reads the maps
 # the service builds and writes them to demo-out/ as files a person can open. Ends by itself
-# after about 30 s; --keep-going runs until Ctrl-C.
+# after about 30 s; --keep-going runs until Ctrl-C (the head; the building route has an end).
+# --scenario building runs the mobile base instead: a pan-head robot drives ~60 m through the
+# synthetic building floor (a person walks along its first corridor) and the client writes the
+# maps for planners (perceptual map, occupancy grid, corrected pose); the whole route takes
+# about 3 min at the scenario's 10 Hz unless --seconds cuts it short.
 #
-#   scripts/demo.sh [--seconds N] [--keep-going] [--out DIR]
+#   scripts/demo.sh [--scenario head|building] [--seconds N] [--keep-going] [--out DIR]
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-SECONDS_TO_RUN=30
+SCENARIO="head"
+SECONDS_TO_RUN=
 KEEP_GOING=0
 OUT=demo-out
 while [ $# -gt 0 ]; do
   case "$1" in
+    --scenario) SCENARIO="$2"; shift 2 ;;
     --seconds) SECONDS_TO_RUN="$2"; shift 2 ;;
     --keep-going) KEEP_GOING=1; shift ;;
     --out) OUT="$2"; shift 2 ;;
-    -h|--help) sed -n '2,8p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,12p' "$0"; exit 0 ;;
     *) echo "demo.sh: unknown argument $1" >&2; exit 2 ;;
   esac
 done
+case "$SCENARIO" in
+  head | building) ;;
+  *) echo "demo.sh: --scenario is head or building, not '$SCENARIO'" >&2; exit 2 ;;
+esac
+if [ -n "$SECONDS_TO_RUN" ] && ! [[ "$SECONDS_TO_RUN" =~ ^[1-9][0-9]*$ ]]; then
+  echo "demo.sh: --seconds takes a whole number of seconds, not '$SECONDS_TO_RUN'" >&2
+  exit 2
+fi
 
 ./scripts/install-deps.sh
 ./scripts/build.sh
@@ -30,7 +44,8 @@ DOMAIN=${EPMAP_DOMAIN:-42}
 PORT=${EPMAP_PORT:-50051}
 SERVER=127.0.0.1:$PORT
 mkdir -p "$OUT"
-rm -rf "$OUT"/*.png "$OUT"/*.pfm "$OUT"/*.json "$OUT"/*.jsonl "$OUT"/*.txt "$OUT"/expectation
+rm -rf "$OUT"/*.png "$OUT"/*.pfm "$OUT"/*.pgm "$OUT"/*.yaml "$OUT"/*.svg "$OUT"/*.json \
+  "$OUT"/*.jsonl "$OUT"/*.txt "$OUT"/expectation
 
 PIDS=()
 cleanup() {
@@ -39,29 +54,47 @@ cleanup() {
 }
 trap cleanup EXIT INT TERM
 
-echo "== epmapd on 127.0.0.1:$PORT, DDS domain $DOMAIN (log: $OUT/epmapd.log)"
-# The head's nearest surfaces (~0.38 m at 554 px focal length, 68 mm baseline) need ~100 px.
-$BIN/epmapd --listen "$SERVER" --domain "$DOMAIN" --urdf clients/sim/urdf/icub_head.urdf \
-  --num-disparities 112 > "$OUT/epmapd.log" 2>&1 &
-PIDS+=($!)
+# Both robots publish over DDS at their own rates (the head 30 Hz, the base 10 Hz), as a camera
+# driver and encoders would: the stamps are the wall clock, so a faster rate would be a faster
+# robot. The head runs 30 s by default; the building robot its whole route (1849 frames).
+if [ "$SCENARIO" = head ]; then
+  RATE=30
+  URDF=clients/sim/urdf/icub_head.urdf
+  # The head's nearest surfaces (~0.38 m at 554 px focal length, 68 mm baseline) need ~100 px.
+  EPMAPD_ARGS=(--num-disparities 112)
+  SIM_ARGS=()
+  FRAMES=$(( ${SECONDS_TO_RUN:-30} * RATE ))
+else
+  URDF=clients/sim/urdf/pan_robot.urdf
+  EPMAPD_ARGS=()
+  # The person walking along the first corridor is what the unexpected-motion detector flags
+  # and what the maps leave out.
+  SIM_ARGS=(--walker)
+  RATE=10
+  FRAMES=$(( ${SECONDS_TO_RUN:-0} * RATE ))
+  if [ "$FRAMES" = 0 ] || [ "$FRAMES" -gt 1849 ]; then FRAMES=1849; fi
+fi
+if [ "$KEEP_GOING" = 1 ] && [ "$SCENARIO" = head ]; then FRAMES=100000000; fi
+
+echo "== epmapd on 127.0.0.1:$PORT, DDS domain $DOMAIN, $URDF (log: $OUT/epmapd.log)"
+$BIN/epmapd --listen "$SERVER" --domain "$DOMAIN" --urdf "$URDF" "${EPMAPD_ARGS[@]}" \
+  > "$OUT/epmapd.log" 2>&1 &
+PIDS+=("$!")
 for _ in $(seq 1 100); do
   $BIN/epmapctl --server "$SERVER" --timeout 1 status > /dev/null 2>&1 && break
   sleep 0.2
 done
 
-# The synthetic head publishes at 30 Hz over DDS, as a camera driver and encoders would.
-FRAMES=$((SECONDS_TO_RUN * 30))
-if [ "$KEEP_GOING" = 1 ]; then FRAMES=100000000; fi
-echo "== epmap-sim publish --scenario head ($FRAMES frames at 30 Hz; log: $OUT/sim.log)"
-$BIN/epmap-sim publish --scenario head --domain "$DOMAIN" --rate 30 --frames "$FRAMES" \
-  > "$OUT/sim.log" 2>&1 &
+echo "== epmap-sim publish --scenario $SCENARIO ${SIM_ARGS[*]} ($FRAMES frames at $RATE Hz; log: $OUT/sim.log)"
+$BIN/epmap-sim publish --scenario "$SCENARIO" "${SIM_ARGS[@]}" --domain "$DOMAIN" --rate "$RATE" \
+  --frames "$FRAMES" > "$OUT/sim.log" 2>&1 &
 SIM=$!
-PIDS+=($SIM)
+PIDS+=("$SIM")
 
 # What moves on its own, as it happens: one JSON line per frame with unexpected regions.
 $BIN/epmapctl --server "$SERVER" watch-unexpected --min-area 200 > "$OUT/unexpected_events.jsonl" \
   2> "$OUT/watch.log" &
-PIDS+=($!)
+PIDS+=("$!")
 
 # The client: every few seconds, read the maps and write them out.
 snapshot() {
@@ -72,6 +105,16 @@ snapshot() {
     2>&1 || true
   $BIN/epmapctl --server "$SERVER" unexpected --out "$OUT/unexpected.png" > "$OUT/unexpected.txt" \
     2>&1 || true
+  if [ "$SCENARIO" = building ]; then
+    # The maps for planners (mobile-base mode); before the first key frame they are not there yet.
+    for f in pmap.svg pmap.json; do
+      $BIN/epmapctl --server "$SERVER" pmap --out "$OUT/$f" > /dev/null 2>&1 || true
+    done
+    for f in grid.png grid.pgm; do
+      $BIN/epmapctl --server "$SERVER" grid --out "$OUT/$f" > /dev/null 2>&1 || true
+    done
+    $BIN/epmapctl --server "$SERVER" pose --json > "$OUT/pose.json" 2> /dev/null || true
+  fi
   $BIN/epmapctl --server "$SERVER" status > "$OUT/status.txt" || true
   $BIN/epmapctl --server "$SERVER" status --json > "$OUT/status.json" || true
 }
@@ -88,10 +131,16 @@ echo
 echo "== summary (full status in $OUT/status.txt)"
 sed -n '1,6p' "$OUT/status.txt"
 echo
-echo "expected perception (paper 000): $(cat "$OUT/expectation.txt" 2>/dev/null | sed 's/^wrote [^ ]* //')"
+echo "expected perception (paper 000): $(sed 's/^wrote [^ ]* //' "$OUT/expectation.txt" 2>/dev/null)"
 echo "unexpected now: $(sed -n 2p "$OUT/unexpected.txt" 2>/dev/null)"
 echo "frames with something moving on its own: $(wc -l < "$OUT/unexpected_events.jsonl") (JSON lines in $OUT/unexpected_events.jsonl)"
+if [ "$SCENARIO" = building ]; then
+  echo
+  grep -E '^(maps|key frames|perceptual map|occupancy grid)' "$OUT/status.txt" || true
+  echo "pose (odometry, corrected, difference): $(tr -d '\n ' < "$OUT/pose.json" 2>/dev/null)"
+fi
 echo
 echo "maps written to $OUT/:"
-ls -1 "$OUT" | grep -E '\.(png|pfm|json|jsonl)$' | sed 's/^/  /'
-ls -1 "$OUT/expectation" 2>/dev/null | sed 's|^|  expectation/|'
+for f in "$OUT"/*.{png,pfm,pgm,yaml,svg,json,jsonl} "$OUT"/expectation/*.png; do
+  if [ -e "$f" ]; then echo "  ${f#"$OUT"/}"; fi
+done
