@@ -2,6 +2,9 @@
 // Typed DDS writers and readers with the QoS the project uses everywhere:
 //   readers BEST_EFFORT + VOLATILE (they match any writer, as ROS's sensor-data profile),
 //   writers RELIABLE + VOLATILE (every reader matches them).
+// A latched topic (ROS's "transient local": rt/map, as map_server publishes it) keeps its last
+// samples for readers that join later: Durability::kTransientLocal on the writer, and on a
+// reader that wants them (reliable then, which a best-effort reader cannot ask of history).
 // Readers copy each sample out on Fast DDS's listener thread and hand it to a callback that
 // must not block.
 
@@ -33,15 +36,20 @@ struct ReaderCounters {
   std::atomic<uint64_t> rejected{0};   // rejected by DDS (resource limits)
 };
 
+enum class Durability { kVolatile, kTransientLocal };
+
 template <class Msg, class PubSubType>
 class Writer {
  public:
-  Writer(Participant& participant, const std::string& topic_name, int depth = 10) {
+  Writer(Participant& participant, const std::string& topic_name, int depth = 10,
+         Durability durability = Durability::kVolatile) {
     using namespace eprosima::fastdds::dds;
     auto* topic = participant.Topic(topic_name, TypeSupport(new PubSubType()));
     DataWriterQos qos = DATAWRITER_QOS_DEFAULT;
     qos.reliability().kind = RELIABLE_RELIABILITY_QOS;
-    qos.durability().kind = VOLATILE_DURABILITY_QOS;
+    qos.durability().kind = durability == Durability::kTransientLocal
+                                ? TRANSIENT_LOCAL_DURABILITY_QOS
+                                : VOLATILE_DURABILITY_QOS;
     qos.history().kind = KEEP_LAST_HISTORY_QOS;
     qos.history().depth = depth;
     // Images are large and unbounded: let the history grow payloads as needed.
@@ -92,16 +100,18 @@ class Reader : public eprosima::fastdds::dds::DataReaderListener {
   using Callback = std::function<void(Msg&& msg)>;
 
   // max_payload_bytes: samples larger than this are refused before decoding.
+  // kTransientLocal: also the samples a latched writer kept from before this reader (reliable).
   Reader(Participant& participant, const std::string& topic_name, Callback on_sample,
-         uint32_t max_payload_bytes, int depth = 5)
+         uint32_t max_payload_bytes, int depth = 5, Durability durability = Durability::kVolatile)
       : on_sample_(std::move(on_sample)) {
     using namespace eprosima::fastdds::dds;
     // The guarded type registers under the same ROS type name as the plain one.
     auto* topic =
         participant.Topic(topic_name, TypeSupport(new GuardedType<PubSubType>(max_payload_bytes)));
     DataReaderQos qos = DATAREADER_QOS_DEFAULT;
-    qos.reliability().kind = BEST_EFFORT_RELIABILITY_QOS;
-    qos.durability().kind = VOLATILE_DURABILITY_QOS;
+    const bool latched = durability == Durability::kTransientLocal;
+    qos.reliability().kind = latched ? RELIABLE_RELIABILITY_QOS : BEST_EFFORT_RELIABILITY_QOS;
+    qos.durability().kind = latched ? TRANSIENT_LOCAL_DURABILITY_QOS : VOLATILE_DURABILITY_QOS;
     qos.history().kind = KEEP_LAST_HISTORY_QOS;
     qos.history().depth = depth;
     qos.endpoint().history_memory_policy =

@@ -14,6 +14,10 @@ struct TopicNames {
   std::string joints = "rt/joint_states";
   std::string odom = "rt/odom";
   std::string eye_hand_samples = "rt/epmap/eye_hand_samples";
+  // What epmapd publishes in mobile-base mode (empty: not published): the occupancy grid as
+  // nav_msgs/OccupancyGrid (transient local, as map_server) and map -> odom on tf.
+  std::string map = "rt/map";
+  std::string tf = "rt/tf";
 };
 
 }  // namespace epmap::dds

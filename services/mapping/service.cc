@@ -28,6 +28,8 @@ MappingService::MappingService(const ServiceConfig& config)
   pipeline_->Start();
   ingest_ = std::make_unique<DdsIngest>(config_, queue_, sensors_, counters_);
   ingest_->SetEyeHandCallback(calibration_->EyeHandSamplesCallback());
+  ros_maps_ = std::make_unique<RosMapPublisher>(config_, ingest_->participant(), snapshots_,
+                                                pipeline_->events());
 
   map_service_ = std::make_unique<MapServiceImpl>(*this);
   grpc::EnableDefaultHealthCheckService(true);
@@ -64,7 +66,8 @@ void MappingService::Shutdown() {
     if (calibration_) calibration_->Shutdown();
     server_->Shutdown(std::chrono::system_clock::now() + std::chrono::seconds(2));
   }
-  ingest_.reset();  // no more DDS callbacks
+  ros_maps_.reset();  // before the participant it writes through
+  ingest_.reset();    // no more DDS callbacks
   queue_.Close();
   if (pipeline_) pipeline_->Stop();
   if (calibration_) calibration_->Shutdown();

@@ -15,6 +15,7 @@
 #include "services/mapping/ingest/sensor_state.h"
 #include "services/mapping/pipeline/map_snapshot.h"
 #include "services/mapping/pipeline/pipeline.h"
+#include "services/mapping/ros_output/ros_map_publisher.h"
 
 namespace epmap::mapping {
 
@@ -54,6 +55,7 @@ class MappingService {
   std::unique_ptr<CalibrationComponent> calibration_;
   std::unique_ptr<Pipeline> pipeline_;
   std::unique_ptr<DdsIngest> ingest_;
+  std::unique_ptr<RosMapPublisher> ros_maps_;  // rt/map and rt/tf (mobile-base mode)
   std::unique_ptr<MapServiceImpl> map_service_;
   std::unique_ptr<grpc::Server> server_;
   std::string bound_address_;

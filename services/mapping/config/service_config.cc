@@ -87,6 +87,8 @@ void Apply(const YAML::Node& root, ServiceConfig& c) {
     t.Get("joint_states", c.topics.joints);
     t.Get("odometry", c.topics.odom);
     t.Get("eye_hand_samples", c.topics.eye_hand_samples);
+    t.Get("map", c.topics.map);
+    t.Get("tf", c.topics.tf);
     t.RejectUnknownKeys();
     s.RejectUnknownKeys();
   }
@@ -170,6 +172,9 @@ void Apply(const YAML::Node& root, ServiceConfig& c) {
     s.Get("open_stop_in_maps", c.maps.open_stop_in_maps);
     s.Get("reference_skip_from_height_m", c.maps.reference_skip_from_height_m);
     s.Get("reference_skip_to_height_m", c.maps.reference_skip_to_height_m);
+    s.Get("map_frame", c.maps.map_frame);
+    s.Get("odom_frame", c.maps.odom_frame);
+    s.Get("grid_publish_period_s", c.maps.grid_publish_period_s);
     s.RejectUnknownKeys();
   }
   {
@@ -248,6 +253,12 @@ void ServiceConfig::Validate() const {
         !std::isfinite(m.reference_skip_to_height_m)) {
       bad("maps.reference_skip_from_height_m and reference_skip_to_height_m must be finite");
     }
+    if (m.map_frame.empty() || m.odom_frame.empty() || m.map_frame == m.odom_frame) {
+      bad("maps.map_frame and maps.odom_frame must be two different, non-empty frame names");
+    }
+    if (!(m.grid_publish_period_s > 0) || !std::isfinite(m.grid_publish_period_s)) {
+      bad("maps.grid_publish_period_s must be a positive number of seconds");
+    }
   }
   static const std::set<std::string> kLevels{"trace", "debug", "info", "warn", "error"};
   if (!kLevels.count(log_level)) bad("log.level must be trace, debug, info, warn or error");
@@ -317,6 +328,8 @@ std::string ToYaml(const ServiceConfig& c) {
   out << YAML::Key << "joint_states" << YAML::Value << c.topics.joints;
   out << YAML::Key << "odometry" << YAML::Value << c.topics.odom;
   out << YAML::Key << "eye_hand_samples" << YAML::Value << c.topics.eye_hand_samples;
+  out << YAML::Key << "map" << YAML::Value << c.topics.map;
+  out << YAML::Key << "tf" << YAML::Value << c.topics.tf;
   out << YAML::EndMap << YAML::EndMap;
   out << YAML::Key << "ingest" << YAML::Value << YAML::BeginMap;
   out << YAML::Key << "pair_tolerance_ms" << YAML::Value << c.pair_tolerance_ns / 1e6;
@@ -393,6 +406,9 @@ std::string ToYaml(const ServiceConfig& c) {
       << c.maps.reference_skip_from_height_m;
   out << YAML::Key << "reference_skip_to_height_m" << YAML::Value
       << c.maps.reference_skip_to_height_m;
+  out << YAML::Key << "map_frame" << YAML::Value << c.maps.map_frame;
+  out << YAML::Key << "odom_frame" << YAML::Value << c.maps.odom_frame;
+  out << YAML::Key << "grid_publish_period_s" << YAML::Value << c.maps.grid_publish_period_s;
   out << YAML::EndMap;
   out << YAML::Key << "log" << YAML::Value << YAML::BeginMap << YAML::Key << "level" << YAML::Value
       << c.log_level << YAML::EndMap;

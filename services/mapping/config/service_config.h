@@ -83,6 +83,11 @@ struct MapsSettings {
   // (furniture; mobile_mapping::MobileMapperParams). from >= to: no band.
   double reference_skip_from_height_m = 0.3;
   double reference_skip_to_height_m = 1.2;
+  // ROS output (dds.topics.map / dds.topics.tf): the grid's frame, and the frame rt/odom's
+  // poses are in; map -> odom on tf is the correction (corrected pose x odometry pose^-1).
+  std::string map_frame = "map";
+  std::string odom_frame = "odom";
+  double grid_publish_period_s = 1.0;  // the grid at most this often (it changes per key frame)
 };
 
 struct ServiceConfig {

@@ -52,6 +52,8 @@ class DdsIngest {
   // malformed) into counters.rejected.
   std::vector<TopicCounters> CollectTopicCounters() const;
   int matched_image_writers() const;
+  // The service's one DDS participant (what epmapd publishes goes through it too).
+  dds::Participant& participant() { return *participant_; }
 
  private:
   void OnImage(StereoSynchronizer::Side side, sensor_msgs::msg::Image&& msg);

@@ -8,16 +8,20 @@
 #include <epmap_dds/CameraInfoPubSubTypes.h>
 #include <epmap_dds/ImagePubSubTypes.h>
 #include <epmap_dds/JointStatePubSubTypes.h>
+#include <epmap_dds/OccupancyGridPubSubTypes.h>
 #include <epmap_dds/OdometryPubSubTypes.h>
+#include <epmap_dds/TFMessagePubSubTypes.h>
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
 #include <fstream>
 #include <memory>
+#include <mutex>
 #include <numbers>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <optional>
 #include <sstream>
 #include <thread>
 
@@ -73,6 +77,20 @@ TEST(MapsE2E, BuildingRunGivesMapsNearTheTrueWalls) {
 
   testing::Epmapd epmapd(domain, {"--urdf", data.urdf->string()}, work);
   ASSERT_TRUE(epmapd.WaitReady()) << epmapd.process().Output();
+
+  // A ROS 2 node's view: map -> odom on rt/tf as it is published (tf is volatile: listen first).
+  dds::Participant ros_side(domain, "maps-e2e-ros-side");
+  std::mutex tf_mutex;
+  std::optional<tf2_msgs::msg::TFMessage> last_tf;
+  size_t tf_messages = 0;
+  dds::Reader<tf2_msgs::msg::TFMessage, tf2_msgs::msg::TFMessagePubSubType> tf_reader(
+      ros_side, "rt/tf",
+      [&](tf2_msgs::msg::TFMessage&& m) {
+        std::lock_guard lock(tf_mutex);
+        last_tf = std::move(m);
+        ++tf_messages;
+      },
+      1u << 20, 100);
 
   // No odometry yet: not a mobile base, so no maps (a clear precondition, not a crash).
   {
@@ -220,6 +238,85 @@ TEST(MapsE2E, BuildingRunGivesMapsNearTheTrueWalls) {
                 heading_error * 180 / std::numbers::pi);
     EXPECT_LT(position_error, 0.3) << out;
     EXPECT_LT(heading_error, 2.0 * std::numbers::pi / 180) << out;
+  }
+
+  // The same maps for ROS 2 planners on DDS. rt/map is latched (transient local, as
+  // map_server): a reader that joins now still gets the newest grid, and it is the grid
+  // GetOccupancyGrid serves (-1 where the export says unknown). rt/tf: map -> odom, the
+  // correction GetPose reports.
+  {
+    grpc::ClientContext context;
+    v1::OccupancyGrid served;
+    ASSERT_TRUE(epmapd.stub().GetOccupancyGrid(&context, {}, &served).ok());
+    std::mutex map_mutex;
+    std::optional<nav_msgs::msg::OccupancyGrid> latched;
+    dds::Reader<nav_msgs::msg::OccupancyGrid, nav_msgs::msg::OccupancyGridPubSubType> map_reader(
+        ros_side, "rt/map",
+        [&](nav_msgs::msg::OccupancyGrid&& m) {
+          std::lock_guard lock(map_mutex);
+          latched = std::move(m);
+        },
+        16u << 20, 1, dds::Durability::kTransientLocal);
+    const int64_t want_stamp = served.stamp_ns();
+    const auto stamp_of = [](const builtin_interfaces::msg::Time& t) {
+      return int64_t{t.sec()} * 1'000'000'000 + t.nanosec();
+    };
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(15);
+    std::optional<nav_msgs::msg::OccupancyGrid> grid;
+    while (std::chrono::steady_clock::now() < deadline) {
+      {
+        std::lock_guard lock(map_mutex);
+        if (latched && stamp_of(latched->header().stamp()) == want_stamp) grid = latched;
+      }
+      if (grid) break;
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    ASSERT_TRUE(grid.has_value()) << "no grid with the served stamp on rt/map";
+    EXPECT_EQ(grid->header().frame_id(), "map");
+    EXPECT_EQ(grid->info().width(), served.width());
+    EXPECT_EQ(grid->info().height(), served.height());
+    EXPECT_FLOAT_EQ(grid->info().resolution(), static_cast<float>(served.resolution_m()));
+    EXPECT_DOUBLE_EQ(grid->info().origin().position().x(), served.origin().x());
+    EXPECT_DOUBLE_EQ(grid->info().origin().position().y(), served.origin().y());
+    ASSERT_EQ(grid->data().size(), served.occupancy().size());
+    size_t mismatched = 0, unknown = 0, occupied = 0;
+    for (size_t i = 0; i < grid->data().size(); ++i) {
+      const auto byte = static_cast<uint8_t>(served.occupancy()[i]);
+      const int want = byte == 255 ? -1 : byte;
+      mismatched += grid->data()[i] != want;
+      unknown += grid->data()[i] == -1;
+      occupied += grid->data()[i] >= 65;
+    }
+    EXPECT_EQ(mismatched, 0u);
+    EXPECT_GT(unknown, 0u);
+    EXPECT_GT(occupied, 20u);
+    std::printf("rt/map: %ux%u, %zu unknown, %zu occupied (>= 65), same as GetOccupancyGrid\n",
+                grid->info().width(), grid->info().height(), unknown, occupied);
+
+    grpc::ClientContext pose_context;
+    v1::PoseEstimate pose;
+    ASSERT_TRUE(epmapd.stub().GetPose(&pose_context, {}, &pose).ok());
+    std::lock_guard lock(tf_mutex);
+    ASSERT_TRUE(last_tf.has_value()) << "nothing on rt/tf";
+    ASSERT_EQ(last_tf->transforms().size(), 1u);
+    const auto& t = last_tf->transforms()[0];
+    EXPECT_EQ(t.header().frame_id(), "map");
+    EXPECT_EQ(t.child_frame_id(), "odom");
+    EXPECT_EQ(stamp_of(t.header().stamp()), pose.stamp_ns());
+    const Eigen::Isometry2d expected =
+        Pose(pose.corrected().x(), pose.corrected().y(), pose.corrected().theta()) *
+        Pose(pose.odometry().x(), pose.odometry().y(), pose.odometry().theta()).inverse();
+    const auto& q = t.transform_value().rotation();
+    const double yaw = 2 * std::atan2(q.z(), q.w());
+    EXPECT_NEAR(t.transform_value().translation().x(), expected.translation().x(), 1e-3);
+    EXPECT_NEAR(t.transform_value().translation().y(), expected.translation().y(), 1e-3);
+    EXPECT_NEAR(
+        std::remainder(yaw - Eigen::Rotation2Dd(expected.linear()).angle(), 2 * std::numbers::pi),
+        0.0, 1e-3);
+    EXPECT_NEAR(q.x() * q.x() + q.y() * q.y() + q.z() * q.z() + q.w() * q.w(), 1.0, 1e-9);
+    std::printf("rt/tf: %zu map -> odom messages, the last (%.3f, %.3f) m, %.2f deg\n", tf_messages,
+                t.transform_value().translation().x(), t.transform_value().translation().y(),
+                yaw * 180 / std::numbers::pi);
   }
   // Kept for a look when something failed; 25 MB a run otherwise left in the temp dir.
   if (!HasFailure()) std::filesystem::remove_all(work);

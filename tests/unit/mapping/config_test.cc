@@ -79,5 +79,29 @@ TEST(ServiceConfig, MapsSectionIsReadAndChecked) {
                std::invalid_argument);
 }
 
+TEST(ServiceConfig, RosOutputTopicsAndFramesAreReadAndChecked) {
+  ServiceConfig c;
+  mapping::ApplyYaml(
+      "dds:\n  topics:\n    map: \"rt/robot1/map\"\n    tf: \"\"\n"
+      "maps:\n  map_frame: \"robot1_map\"\n  grid_publish_period_s: 2.5\n",
+      c);
+  EXPECT_EQ(c.topics.map, "rt/robot1/map");
+  EXPECT_TRUE(c.topics.tf.empty());  // empty: tf not published
+  EXPECT_EQ(c.maps.map_frame, "robot1_map");
+  EXPECT_EQ(c.maps.odom_frame, "odom");
+  EXPECT_DOUBLE_EQ(c.maps.grid_publish_period_s, 2.5);
+  EXPECT_NO_THROW(c.Validate());
+  c.maps.odom_frame = "robot1_map";
+  try {
+    c.Validate();
+    FAIL() << "map_frame == odom_frame must be refused";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("maps.map_frame"), std::string::npos) << e.what();
+  }
+  ServiceConfig d;
+  d.maps.grid_publish_period_s = 0;
+  EXPECT_THROW(d.Validate(), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace epmap

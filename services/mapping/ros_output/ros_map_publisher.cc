@@ -1,0 +1,152 @@
+#include "services/mapping/ros_output/ros_map_publisher.h"
+
+#include <epmap_dds/OccupancyGridPubSubTypes.h>
+#include <epmap_dds/TFMessagePubSubTypes.h>
+#include <spdlog/spdlog.h>
+
+#include <cmath>
+#include <optional>
+
+#include "common/dds/endpoints.h"
+
+namespace epmap::mapping {
+
+namespace {
+
+void SetStamp(int64_t stamp_ns, builtin_interfaces::msg::Time* t) {
+  // Floor division: a stamp before 1970 still gets nanosec in [0, 1e9), as ROS requires.
+  int64_t sec = stamp_ns / 1'000'000'000;
+  int64_t nsec = stamp_ns % 1'000'000'000;
+  if (nsec < 0) {
+    nsec += 1'000'000'000;
+    --sec;
+  }
+  t->sec(static_cast<int32_t>(sec));
+  t->nanosec(static_cast<uint32_t>(nsec));
+}
+
+}  // namespace
+
+Eigen::Isometry2d MapToOdom(const Eigen::Isometry2d& T_map_base_corrected,
+                            const Eigen::Isometry2d& T_odom_base) {
+  return T_map_base_corrected * T_odom_base.inverse();
+}
+
+void ToRosGrid(const occupancy::GridExport& grid, int64_t stamp_ns, const std::string& frame,
+               nav_msgs::msg::OccupancyGrid* out) {
+  SetStamp(stamp_ns, &out->header().stamp());
+  out->header().frame_id(frame);
+  auto& info = out->info();
+  SetStamp(stamp_ns, &info.map_load_time());
+  info.resolution(static_cast<float>(grid.resolution_m));
+  info.width(grid.width);
+  info.height(grid.height);
+  info.origin().position().x(grid.origin_x);
+  info.origin().position().y(grid.origin_y);
+  info.origin().position().z(0.0);
+  info.origin().orientation().x(0.0);
+  info.origin().orientation().y(0.0);
+  info.origin().orientation().z(0.0);
+  info.origin().orientation().w(1.0);
+  std::vector<int8_t> data(grid.occupancy.size());
+  for (size_t i = 0; i < data.size(); ++i) {
+    const uint8_t v = grid.occupancy[i];
+    data[i] = v == occupancy::GridExport::kUnknown ? int8_t{-1} : static_cast<int8_t>(v);
+  }
+  out->data(std::move(data));
+}
+
+struct RosMapPublisher::Writers {
+  std::optional<dds::Writer<nav_msgs::msg::OccupancyGrid, nav_msgs::msg::OccupancyGridPubSubType>>
+      map;
+  std::optional<dds::Writer<tf2_msgs::msg::TFMessage, tf2_msgs::msg::TFMessagePubSubType>> tf;
+};
+
+RosMapPublisher::RosMapPublisher(const ServiceConfig& config, dds::Participant& participant,
+                                 const SnapshotStore& snapshots, CounterSet& events)
+    : config_(config), snapshots_(snapshots), events_(events), writers_(new Writers) {
+  if (!config_.topics.map.empty()) {
+    // Depth 1, latched: a reader joining later gets the newest grid only.
+    writers_->map.emplace(participant, dds::RosTopic(config_.topics.map), 1,
+                          dds::Durability::kTransientLocal);
+  }
+  if (!config_.topics.tf.empty()) {
+    writers_->tf.emplace(participant, dds::RosTopic(config_.topics.tf), 100);
+  }
+  if (writers_->map || writers_->tf) thread_ = std::thread([this] { Run(); });
+}
+
+RosMapPublisher::~RosMapPublisher() {
+  Stop();
+}
+
+void RosMapPublisher::Stop() {
+  stop_ = true;
+  if (thread_.joinable()) thread_.join();
+}
+
+void RosMapPublisher::Run() {
+  using Clock = std::chrono::steady_clock;
+  const auto period = std::chrono::duration_cast<Clock::duration>(
+      std::chrono::duration<double>(config_.maps.grid_publish_period_s));
+  uint64_t seen_frame = 0;
+  std::shared_ptr<const mobile_mapping::MapsSnapshot> published, grid_pending;
+  Clock::time_point last_grid{};
+  while (!stop_) {
+    const auto snapshot = snapshots_.WaitNewer(seen_frame, std::chrono::milliseconds(200));
+    if (!snapshot || snapshot->frame_index <= seen_frame) {
+      // Nothing newer (or the store closed at shutdown): do not spin.
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    } else {
+      seen_frame = snapshot->frame_index;
+      if (snapshot->maps && snapshot->maps != published) {
+        published = snapshot->maps;
+        grid_pending = snapshot->maps;
+        Publish(*snapshot->maps, false);
+      }
+    }
+    // The grid at most once a period, the newest one; a change that arrives within the period
+    // goes out when it ends.
+    if (grid_pending && Clock::now() - last_grid >= period) {
+      Publish(*grid_pending, true);
+      grid_pending.reset();
+      last_grid = Clock::now();
+    }
+  }
+}
+
+void RosMapPublisher::Publish(const mobile_mapping::MapsSnapshot& maps, bool grid_due) {
+  if (grid_due) {
+    if (!writers_->map) return;
+    const occupancy::GridExport g = maps.grid.Export();
+    if (g.width == 0 || g.height == 0) return;  // no known cell yet
+    nav_msgs::msg::OccupancyGrid msg;
+    ToRosGrid(g, maps.stamp_ns, config_.maps.map_frame, &msg);
+    if (writers_->map->Write(msg)) {
+      events_.Increment("ros_map_published");
+    } else {
+      spdlog::warn("rt/map: the grid ({}x{}) could not be written", g.width, g.height);
+    }
+    return;
+  }
+  if (!writers_->tf || maps.poses.empty()) return;
+  const auto& r = maps.poses.back();
+  const Eigen::Isometry2d T = MapToOdom(r.T_world_base, r.T_world_base_odometry);
+  geometry_msgs::msg::TransformStamped t;
+  SetStamp(r.stamp_ns, &t.header().stamp());
+  t.header().frame_id(config_.maps.map_frame);
+  t.child_frame_id(config_.maps.odom_frame);
+  t.transform_value().translation().x(T.translation().x());
+  t.transform_value().translation().y(T.translation().y());
+  t.transform_value().translation().z(0.0);
+  const double yaw = std::atan2(T.linear()(1, 0), T.linear()(0, 0));
+  t.transform_value().rotation().x(0.0);
+  t.transform_value().rotation().y(0.0);
+  t.transform_value().rotation().z(std::sin(yaw / 2));
+  t.transform_value().rotation().w(std::cos(yaw / 2));
+  tf2_msgs::msg::TFMessage msg;
+  msg.transforms().push_back(t);
+  if (writers_->tf->Write(msg)) events_.Increment("ros_tf_published");
+}
+
+}  // namespace epmap::mapping

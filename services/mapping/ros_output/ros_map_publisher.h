@@ -1,0 +1,64 @@
+#pragma once
+// The maps for ROS 2 planners on DDS, beside the gRPC API: in mobile-base mode epmapd publishes
+// its occupancy grid as nav_msgs/OccupancyGrid on rt/map (reliable, transient local: a planner
+// or RViz that starts later still gets the last grid, as from map_server) and its heading and
+// position correction as the map -> odom transform on rt/tf (what a ROS localiser publishes, so
+// nav2 and RViz place the odometry in the map). A thread of its own follows the snapshots; the
+// pipeline never waits for DDS.
+
+#include <Eigen/Geometry>
+#include <atomic>
+#include <chrono>
+#include <memory>
+#include <thread>
+
+#include "common/dds/participant.h"
+#include "services/mapping/config/service_config.h"
+#include "services/mapping/ingest/counters.h"
+#include "services/mapping/pipeline/map_snapshot.h"
+
+namespace nav_msgs::msg {
+class OccupancyGrid;
+}
+namespace tf2_msgs::msg {
+class TFMessage;
+}
+
+namespace epmap::mapping {
+
+// map -> odom: the corrected base pose times the inverse of the odometry's, at the same key
+// frame (both in the frame the first key frame's odometry is in, which the map starts as).
+Eigen::Isometry2d MapToOdom(const Eigen::Isometry2d& T_map_base_corrected,
+                            const Eigen::Isometry2d& T_odom_base);
+
+// The grid export in ROS's layout: row-major from the lowest y row (as the export), -1 unknown,
+// 0..100 occupancy; origin = the lower-left corner of cell (0, 0), no rotation.
+void ToRosGrid(const occupancy::GridExport& grid, int64_t stamp_ns, const std::string& frame,
+               nav_msgs::msg::OccupancyGrid* out);
+
+class RosMapPublisher {
+ public:
+  // Publishes on config.topics.map / .tf (an empty name: that one is off) through participant,
+  // counting in events: ros_map_published, ros_tf_published.
+  RosMapPublisher(const ServiceConfig& config, dds::Participant& participant,
+                  const SnapshotStore& snapshots, CounterSet& events);
+  ~RosMapPublisher();  // stops the thread
+  RosMapPublisher(const RosMapPublisher&) = delete;
+  RosMapPublisher& operator=(const RosMapPublisher&) = delete;
+
+  void Stop();
+
+ private:
+  struct Writers;
+  void Run();
+  void Publish(const mobile_mapping::MapsSnapshot& maps, bool grid_due);
+
+  const ServiceConfig config_;
+  const SnapshotStore& snapshots_;
+  CounterSet& events_;
+  std::unique_ptr<Writers> writers_;
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
+}  // namespace epmap::mapping
