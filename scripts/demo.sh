@@ -136,8 +136,27 @@ echo "unexpected now: $(sed -n 2p "$OUT/unexpected.txt" 2>/dev/null)"
 echo "frames with something moving on its own: $(wc -l < "$OUT/unexpected_events.jsonl") (JSON lines in $OUT/unexpected_events.jsonl)"
 if [ "$SCENARIO" = building ]; then
   echo
-  grep -E '^(maps|key frames|perceptual map|occupancy grid)' "$OUT/status.txt" || true
+  echo "maps events: $(grep -E '^ +(maps_key_frames|maps_correlation_shifts|maps_key_frame_motion_masked|ros_map_published|ros_tf_published) ' \
+    "$OUT/status.txt" | awk '{printf "%s%s %s", sep, $1, $2; sep=", "}')"
   echo "pose (odometry, corrected, difference): $(tr -d '\n ' < "$OUT/pose.json" 2>/dev/null)"
+  # The perceptual map as GetPerceptualMap served it, and what a planner client reads of the
+  # grid (clients/python/epmap_planner.py, the remote-planner example).
+  /usr/bin/python3 - "$OUT/pmap.json" <<'PY' || true
+import json, math, sys
+m = json.load(open(sys.argv[1]))
+length = sum(math.hypot(s["x2"] - s["x1"], s["y2"] - s["y1"]) for s in m["segments"])
+print("perceptual map: %d segments, %.0f m of them, %d views on a path of %d points" %
+      (len(m["segments"]), length, len(m.get("views", [])), len(m.get("path", []))))
+PY
+  /usr/bin/python3 clients/python/epmap_planner.py --server "$SERVER" > "$OUT/planner.json" \
+    2> "$OUT/planner.log" || true
+  /usr/bin/python3 - "$OUT/planner.json" <<'PY' || true
+import json, sys
+g = json.load(open(sys.argv[1]))["map"]
+print("planner client: grid %dx%d cells of %.2f m, %d known, %d occupied; free %.2f m straight "
+      "ahead of the corrected pose (ends: %s)" % (g["width"], g["height"], g["resolution_m"],
+      g["known_cells"], g["occupied_cells"], g["free_ahead_m"], g["free_ahead_ends"]))
+PY
 fi
 echo
 echo "maps written to $OUT/:"
