@@ -102,33 +102,33 @@ void RosMapPublisher::Run() {
       if (snapshot->maps && snapshot->maps != published) {
         published = snapshot->maps;
         grid_pending = snapshot->maps;
-        Publish(*snapshot->maps, false);
+        PublishTransform(*snapshot->maps);
       }
     }
     // The grid at most once a period, the newest one; a change that arrives within the period
     // goes out when it ends.
     if (grid_pending && Clock::now() - last_grid >= period) {
-      Publish(*grid_pending, true);
+      PublishGrid(*grid_pending);
       grid_pending.reset();
       last_grid = Clock::now();
     }
   }
 }
 
-void RosMapPublisher::Publish(const mobile_mapping::MapsSnapshot& maps, bool grid_due) {
-  if (grid_due) {
-    if (!writers_->map) return;
-    const occupancy::GridExport g = maps.grid.Export();
-    if (g.width == 0 || g.height == 0) return;  // no known cell yet
-    nav_msgs::msg::OccupancyGrid msg;
-    ToRosGrid(g, maps.stamp_ns, config_.maps.map_frame, &msg);
-    if (writers_->map->Write(msg)) {
-      events_.Increment("ros_map_published");
-    } else {
-      spdlog::warn("rt/map: the grid ({}x{}) could not be written", g.width, g.height);
-    }
-    return;
+void RosMapPublisher::PublishGrid(const mobile_mapping::MapsSnapshot& maps) {
+  if (!writers_->map) return;
+  const occupancy::GridExport g = maps.grid.Export();
+  if (g.width == 0 || g.height == 0) return;  // no known cell yet
+  nav_msgs::msg::OccupancyGrid msg;
+  ToRosGrid(g, maps.stamp_ns, config_.maps.map_frame, &msg);
+  if (writers_->map->Write(msg)) {
+    events_.Increment("ros_map_published");
+  } else {
+    spdlog::warn("rt/map: the grid ({}x{}) could not be written", g.width, g.height);
   }
+}
+
+void RosMapPublisher::PublishTransform(const mobile_mapping::MapsSnapshot& maps) {
   if (!writers_->tf || maps.poses.empty()) return;
   const auto& r = maps.poses.back();
   const Eigen::Isometry2d T = MapToOdom(r.T_world_base, r.T_world_base_odometry);

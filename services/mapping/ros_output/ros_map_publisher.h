@@ -51,7 +51,8 @@ class RosMapPublisher {
  private:
   struct Writers;
   void Run();
-  void Publish(const mobile_mapping::MapsSnapshot& maps, bool grid_due);
+  void PublishGrid(const mobile_mapping::MapsSnapshot& maps);       // rt/map
+  void PublishTransform(const mobile_mapping::MapsSnapshot& maps);  // rt/tf: map -> odom
 
   const ServiceConfig config_;
   const SnapshotStore& snapshots_;
