@@ -4,6 +4,7 @@
 #include <epmap_dds/TFMessagePubSubTypes.h>
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <cmath>
 #include <optional>
 
@@ -99,10 +100,13 @@ void RosMapPublisher::Run() {
       std::this_thread::sleep_for(std::chrono::milliseconds(50));
     } else {
       seen_frame = snapshot->frame_index;
-      if (snapshot->maps && snapshot->maps != published) {
-        published = snapshot->maps;
-        grid_pending = snapshot->maps;
-        PublishTransform(*snapshot->maps);
+      if (snapshot->maps) {
+        if (snapshot->maps != published) {
+          published = snapshot->maps;
+          grid_pending = snapshot->maps;
+        }
+        // Every frame, at its own time (the correction holds until the next key frame).
+        PublishTransform(*snapshot->maps, std::max(snapshot->stamp_ns, snapshot->maps->stamp_ns));
       }
     }
     // The grid at most once a period, the newest one; a change that arrives within the period
@@ -128,12 +132,12 @@ void RosMapPublisher::PublishGrid(const mobile_mapping::MapsSnapshot& maps) {
   }
 }
 
-void RosMapPublisher::PublishTransform(const mobile_mapping::MapsSnapshot& maps) {
+void RosMapPublisher::PublishTransform(const mobile_mapping::MapsSnapshot& maps, int64_t stamp_ns) {
   if (!writers_->tf || maps.poses.empty()) return;
   const auto& r = maps.poses.back();
   const Eigen::Isometry2d T = MapToOdom(r.T_world_base, r.T_world_base_odometry);
   geometry_msgs::msg::TransformStamped t;
-  SetStamp(r.stamp_ns, &t.header().stamp());
+  SetStamp(stamp_ns, &t.header().stamp());
   t.header().frame_id(config_.maps.map_frame);
   t.child_frame_id(config_.maps.odom_frame);
   t.transform_value().translation().x(T.translation().x());

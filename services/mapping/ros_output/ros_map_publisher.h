@@ -4,7 +4,9 @@
 // or RViz that starts later still gets the last grid, as from map_server) and its heading and
 // position correction as the map -> odom transform on rt/tf (what a ROS localiser publishes, so
 // nav2 and RViz place the odometry in the map). A thread of its own follows the snapshots; the
-// pipeline never waits for DDS.
+// pipeline never waits for DDS. The correction changes at key frames only, but map -> odom goes
+// out with every processed frame, stamped with that frame's time: tf lookups at sensor time
+// then never extrapolate past the last key frame while the robot stands still.
 
 #include <Eigen/Geometry>
 #include <atomic>
@@ -51,8 +53,9 @@ class RosMapPublisher {
  private:
   struct Writers;
   void Run();
-  void PublishGrid(const mobile_mapping::MapsSnapshot& maps);       // rt/map
-  void PublishTransform(const mobile_mapping::MapsSnapshot& maps);  // rt/tf: map -> odom
+  void PublishGrid(const mobile_mapping::MapsSnapshot& maps);  // rt/map
+  // rt/tf: map -> odom from the newest key frame's correction, stamped stamp_ns.
+  void PublishTransform(const mobile_mapping::MapsSnapshot& maps, int64_t stamp_ns);
 
   const ServiceConfig config_;
   const SnapshotStore& snapshots_;

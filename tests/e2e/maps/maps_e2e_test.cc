@@ -302,7 +302,14 @@ TEST(MapsE2E, BuildingRunGivesMapsNearTheTrueWalls) {
     const auto& t = last_tf->transforms()[0];
     EXPECT_EQ(t.header().frame_id(), "map");
     EXPECT_EQ(t.child_frame_id(), "odom");
-    EXPECT_EQ(stamp_of(t.header().stamp()), pose.stamp_ns());
+    // Stamped with the newest processed frame, not the key frame the correction comes from
+    // (a lookup at sensor time must not extrapolate), and sent for every frame with maps.
+    v1::ServiceStatus after;
+    ASSERT_TRUE(epmapd.Status(&after).ok());
+    EXPECT_EQ(stamp_of(t.header().stamp()), after.last_stamp_ns());
+    EXPECT_GE(stamp_of(t.header().stamp()), pose.stamp_ns());
+    EXPECT_GT(tf_messages, testing::Epmapd::Count(after.events(), "maps_key_frames"));
+    EXPECT_GE(tf_messages, after.frames_processed() / 2);
     const Eigen::Isometry2d expected =
         Pose(pose.corrected().x(), pose.corrected().y(), pose.corrected().theta()) *
         Pose(pose.odometry().x(), pose.odometry().y(), pose.odometry().theta()).inverse();
