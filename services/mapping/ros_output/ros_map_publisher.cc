@@ -9,24 +9,9 @@
 #include <optional>
 
 #include "common/dds/endpoints.h"
+#include "common/dds/ros_conversions.h"
 
 namespace epmap::mapping {
-
-namespace {
-
-void SetStamp(int64_t stamp_ns, builtin_interfaces::msg::Time* t) {
-  // Floor division: a stamp before 1970 still gets nanosec in [0, 1e9), as ROS requires.
-  int64_t sec = stamp_ns / 1'000'000'000;
-  int64_t nsec = stamp_ns % 1'000'000'000;
-  if (nsec < 0) {
-    nsec += 1'000'000'000;
-    --sec;
-  }
-  t->sec(static_cast<int32_t>(sec));
-  t->nanosec(static_cast<uint32_t>(nsec));
-}
-
-}  // namespace
 
 Eigen::Isometry2d MapToOdom(const Eigen::Isometry2d& T_map_base_corrected,
                             const Eigen::Isometry2d& T_odom_base) {
@@ -35,10 +20,10 @@ Eigen::Isometry2d MapToOdom(const Eigen::Isometry2d& T_map_base_corrected,
 
 void ToRosGrid(const occupancy::GridExport& grid, int64_t stamp_ns, const std::string& frame,
                nav_msgs::msg::OccupancyGrid* out) {
-  SetStamp(stamp_ns, &out->header().stamp());
+  out->header().stamp(dds::FromNanoseconds(stamp_ns));
   out->header().frame_id(frame);
   auto& info = out->info();
-  SetStamp(stamp_ns, &info.map_load_time());
+  info.map_load_time(dds::FromNanoseconds(stamp_ns));
   info.resolution(static_cast<float>(grid.resolution_m));
   info.width(grid.width);
   info.height(grid.height);
@@ -137,7 +122,7 @@ void RosMapPublisher::PublishTransform(const mobile_mapping::MapsSnapshot& maps,
   const auto& r = maps.poses.back();
   const Eigen::Isometry2d T = MapToOdom(r.T_world_base, r.T_world_base_odometry);
   geometry_msgs::msg::TransformStamped t;
-  SetStamp(stamp_ns, &t.header().stamp());
+  t.header().stamp(dds::FromNanoseconds(stamp_ns));
   t.header().frame_id(config_.maps.map_frame);
   t.child_frame_id(config_.maps.odom_frame);
   t.transform_value().translation().x(T.translation().x());

@@ -31,6 +31,7 @@
 #include "common/dds/ros_conversions.h"
 #include "common/dds/topics.h"
 #include "perception/mobile_mapping/map_evaluation.h"
+#include "tests/support/building_run.h"
 #include "tests/support/epmapd_fixture.h"
 
 namespace epmap {
@@ -47,10 +48,6 @@ std::string ReadText(const std::filesystem::path& path) {
   return s.str();
 }
 
-Eigen::Isometry2d Pose(double x, double y, double theta) {
-  return Eigen::Translation2d(x, y) * Eigen::Rotation2Dd(theta);
-}
-
 std::pair<int, std::string> Ctl(const testing::Epmapd& epmapd, const std::filesystem::path& work,
                                 std::vector<std::string> args) {
   args.insert(args.begin(), {"--server", epmapd.address()});
@@ -63,17 +60,8 @@ TEST(MapsE2E, BuildingRunGivesMapsNearTheTrueWalls) {
   const uint32_t domain = testing::UniqueDomainId(61);
 
   // The same run (same seed) recorded: its URDF for epmapd, its ground truth for the checks.
-  const auto rec = work / "rec";
-  const auto [rec_code, rec_out] =
-      testing::RunToCompletion(testing::BinDir() / "epmap-sim",
-                               {"record", "--scenario", "building", "--frames",
-                                std::to_string(kFrames), "--out", rec.string()},
-                               work / "record.log", std::chrono::seconds(60));
-  ASSERT_EQ(rec_code, 0) << rec_out;
-  const auto data = dataset::Load(rec);
-  ASSERT_TRUE(data.urdf.has_value());
-  ASSERT_FALSE(data.walls.empty());
-  ASSERT_FALSE(data.odometry.empty());
+  dataset::Dataset data;
+  ASSERT_NO_FATAL_FAILURE(testing::RecordBuilding(work, kFrames, &data));
 
   testing::Epmapd epmapd(domain, {"--urdf", data.urdf->string()}, work);
   ASSERT_TRUE(epmapd.WaitReady()) << epmapd.process().Output();
@@ -99,21 +87,9 @@ TEST(MapsE2E, BuildingRunGivesMapsNearTheTrueWalls) {
     EXPECT_NE(out.find("FAILED_PRECONDITION"), std::string::npos) << out;
   }
 
-  const auto [pub_code, pub_out] =
-      testing::RunToCompletion(testing::BinDir() / "epmap-sim",
-                               {"publish", "--scenario", "building", "--frames",
-                                std::to_string(kFrames), "--domain", std::to_string(domain)},
-                               work / "publish.log", std::chrono::seconds(90));
-  ASSERT_EQ(pub_code, 0) << pub_out;
-  // Until the queue has drained and the pipeline is idle.
-  uint64_t last = ~0ull;
-  const auto status = epmapd.WaitStatus(
-      [&](const v1::ServiceStatus& s) {
-        const bool idle = s.queue_depth() == 0 && s.frames_processed() == last;
-        last = s.frames_processed();
-        return idle;
-      },
-      std::chrono::seconds(30));
+  v1::ServiceStatus status;
+  ASSERT_NO_FATAL_FAILURE(
+      testing::PublishBuildingUntilIdle(epmapd, domain, work, kFrames, &status));
   EXPECT_EQ(status.mode(), "mobile-base");
   const uint64_t key_frames = testing::Epmapd::Count(status.events(), "maps_key_frames");
   EXPECT_GE(key_frames, 10u) << status.DebugString();
@@ -121,16 +97,10 @@ TEST(MapsE2E, BuildingRunGivesMapsNearTheTrueWalls) {
   EXPECT_EQ(status.key_frames_refused(), 0u) << status.DebugString();
 
   // Ground truth in the world frame of the maps (the start pose = the odometry frame).
-  const auto gt0 = dataset::InterpolatePlanar(data.gt_base_pose, data.odometry.front().stamp_ns);
-  ASSERT_TRUE(gt0.has_value());
-  const auto& o0 = data.odometry.front();
-  const Eigen::Isometry2d T_start_gt =
-      (Pose(gt0->x, gt0->y, gt0->theta) * Pose(o0.x, o0.y, o0.theta).inverse()).inverse();
+  Eigen::Isometry2d T_start_gt;
+  ASSERT_NO_FATAL_FAILURE(testing::GroundTruthToMaps(data, &T_start_gt));
   std::vector<Segment2> walls;
-  for (const auto& w : data.walls) {
-    walls.push_back(
-        {T_start_gt * Eigen::Vector2d(w.x1, w.y1), T_start_gt * Eigen::Vector2d(w.x2, w.y2)});
-  }
+  for (const auto& [a, b] : testing::WallsInMaps(data, T_start_gt)) walls.push_back({a, b});
 
   // Perceptual map: segments in the world frame, most of their length near true walls (the
   // rest is furniture and door frames).
@@ -228,7 +198,7 @@ TEST(MapsE2E, BuildingRunGivesMapsNearTheTrueWalls) {
     }
     const auto gt = dataset::InterpolatePlanar(data.gt_base_pose, data.odometry[best].stamp_ns);
     ASSERT_TRUE(gt.has_value());
-    const Eigen::Isometry2d truth = T_start_gt * Pose(gt->x, gt->y, gt->theta);
+    const Eigen::Isometry2d truth = T_start_gt * testing::PlanarPose(gt->x, gt->y, gt->theta);
     const Eigen::Vector2d corrected(cor["x"].as<double>(), cor["y"].as<double>());
     const double position_error = (corrected - truth.translation()).norm();
     const double heading_error = std::abs(std::remainder(
@@ -258,15 +228,12 @@ TEST(MapsE2E, BuildingRunGivesMapsNearTheTrueWalls) {
         },
         16u << 20, 1, dds::Durability::kTransientLocal);
     const int64_t want_stamp = served.stamp_ns();
-    const auto stamp_of = [](const builtin_interfaces::msg::Time& t) {
-      return int64_t{t.sec()} * 1'000'000'000 + t.nanosec();
-    };
     const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(15);
     std::optional<nav_msgs::msg::OccupancyGrid> grid;
     while (std::chrono::steady_clock::now() < deadline) {
       {
         std::lock_guard lock(map_mutex);
-        if (latched && stamp_of(latched->header().stamp()) == want_stamp) grid = latched;
+        if (latched && dds::ToNanoseconds(latched->header().stamp()) == want_stamp) grid = latched;
       }
       if (grid) break;
       std::this_thread::sleep_for(std::chrono::milliseconds(50));
@@ -306,13 +273,14 @@ TEST(MapsE2E, BuildingRunGivesMapsNearTheTrueWalls) {
     // (a lookup at sensor time must not extrapolate), and sent for every frame with maps.
     v1::ServiceStatus after;
     ASSERT_TRUE(epmapd.Status(&after).ok());
-    EXPECT_EQ(stamp_of(t.header().stamp()), after.last_stamp_ns());
-    EXPECT_GE(stamp_of(t.header().stamp()), pose.stamp_ns());
+    EXPECT_EQ(dds::ToNanoseconds(t.header().stamp()), after.last_stamp_ns());
+    EXPECT_GE(dds::ToNanoseconds(t.header().stamp()), pose.stamp_ns());
     EXPECT_GT(tf_messages, testing::Epmapd::Count(after.events(), "maps_key_frames"));
     EXPECT_GE(tf_messages, after.frames_processed() / 2);
     const Eigen::Isometry2d expected =
-        Pose(pose.corrected().x(), pose.corrected().y(), pose.corrected().theta()) *
-        Pose(pose.odometry().x(), pose.odometry().y(), pose.odometry().theta()).inverse();
+        testing::PlanarPose(pose.corrected().x(), pose.corrected().y(), pose.corrected().theta()) *
+        testing::PlanarPose(pose.odometry().x(), pose.odometry().y(), pose.odometry().theta())
+            .inverse();
     const auto& q = t.transform_value().rotation();
     const double yaw = 2 * std::atan2(q.z(), q.w());
     EXPECT_NEAR(t.transform_value().translation().x(), expected.translation().x(), 1e-3);

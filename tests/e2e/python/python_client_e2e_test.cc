@@ -9,10 +9,21 @@
 #include <limits>
 
 #include "common/dataset/dataset.h"
+#include "tests/support/building_run.h"
 #include "tests/support/epmapd_fixture.h"
 
 namespace epmap {
 namespace {
+
+// clients/python/epmap_planner.py against epmapd, with the stubs the build generated.
+std::pair<int, std::string> RunPlanner(testing::Epmapd& epmapd, const std::filesystem::path& work) {
+  const auto script = testing::SourceDir() / "clients/python/epmap_planner.py";
+  const auto stubs = testing::BinDir().parent_path() / "python";
+  return testing::RunToCompletion(
+      "/usr/bin/python3",
+      {script.string(), "--server", epmapd.address(), "--stubs", stubs.string()},
+      work / "python.log", std::chrono::seconds(60));
+}
 
 TEST(PythonClientE2E, PlannerExampleReadsDepthAhead) {
   if (!std::filesystem::exists("/usr/bin/python3")) GTEST_SKIP() << "no /usr/bin/python3";
@@ -28,12 +39,7 @@ TEST(PythonClientE2E, PlannerExampleReadsDepthAhead) {
                                work / "replay.log", std::chrono::seconds(60));
   ASSERT_EQ(replay_code, 0) << replay_out;
 
-  const auto script = testing::SourceDir() / "clients/python/epmap_planner.py";
-  const auto stubs = testing::BinDir().parent_path() / "python";
-  const auto [code, out] = testing::RunToCompletion(
-      "/usr/bin/python3",
-      {script.string(), "--server", epmapd.address(), "--stubs", stubs.string()},
-      work / "python.log", std::chrono::seconds(60));
+  const auto [code, out] = RunPlanner(epmapd, work);
   ASSERT_EQ(code, 0) << out;
   EXPECT_NE(out.find("\"frames_processed\": 1"), std::string::npos) << out;
   EXPECT_NE(out.find("\"width\": 450"), std::string::npos) << out;
@@ -42,10 +48,6 @@ TEST(PythonClientE2E, PlannerExampleReadsDepthAhead) {
   // A single still pair: expected perception has compared nothing, so nothing moved.
   EXPECT_NE(out.find("\"moving_on_its_own\": []"), std::string::npos) << out;
   std::filesystem::remove_all(work);
-}
-
-Eigen::Isometry2d Pose(double x, double y, double theta) {
-  return Eigen::Translation2d(x, y) * Eigen::Rotation2Dd(theta);
 }
 
 // Distance from p along direction d (unit) to the first wall segment it meets.
@@ -71,38 +73,14 @@ TEST(PythonClientE2E, PlannerExampleReadsTheGridAheadOfAMobileBase) {
   const auto work = testing::FreshTempDir("python-base");
   const uint32_t domain = testing::UniqueDomainId(304);
   constexpr int kFrames = 150;  // out of the start room, facing the corridor through its door
-  const auto rec = work / "rec";
-  const auto [rec_code, rec_out] =
-      testing::RunToCompletion(testing::BinDir() / "epmap-sim",
-                               {"record", "--scenario", "building", "--frames",
-                                std::to_string(kFrames), "--out", rec.string()},
-                               work / "record.log", std::chrono::seconds(60));
-  ASSERT_EQ(rec_code, 0) << rec_out;
-  const auto data = dataset::Load(rec);
-  ASSERT_TRUE(data.urdf.has_value());
+  dataset::Dataset data;
+  ASSERT_NO_FATAL_FAILURE(testing::RecordBuilding(work, kFrames, &data));
   testing::Epmapd epmapd(domain, {"--urdf", data.urdf->string()}, work);
   ASSERT_TRUE(epmapd.WaitReady()) << epmapd.process().Output();
-  const auto [pub_code, pub_out] =
-      testing::RunToCompletion(testing::BinDir() / "epmap-sim",
-                               {"publish", "--scenario", "building", "--frames",
-                                std::to_string(kFrames), "--domain", std::to_string(domain)},
-                               work / "publish.log", std::chrono::seconds(90));
-  ASSERT_EQ(pub_code, 0) << pub_out;
-  uint64_t last = ~0ull;
-  epmapd.WaitStatus(
-      [&](const v1::ServiceStatus& st) {
-        const bool idle = st.queue_depth() == 0 && st.frames_processed() == last;
-        last = st.frames_processed();
-        return idle;
-      },
-      std::chrono::seconds(30));
+  v1::ServiceStatus idle;
+  ASSERT_NO_FATAL_FAILURE(testing::PublishBuildingUntilIdle(epmapd, domain, work, kFrames, &idle));
 
-  const auto script = testing::SourceDir() / "clients/python/epmap_planner.py";
-  const auto stubs = testing::BinDir().parent_path() / "python";
-  const auto [code, out] = testing::RunToCompletion(
-      "/usr/bin/python3",
-      {script.string(), "--server", epmapd.address(), "--stubs", stubs.string()},
-      work / "python.log", std::chrono::seconds(60));
+  const auto [code, out] = RunPlanner(epmapd, work);
   ASSERT_EQ(code, 0) << out;
   const YAML::Node j = YAML::Load(out);
   EXPECT_EQ(j["mode"].as<std::string>(), "mobile-base") << out;
@@ -125,16 +103,9 @@ TEST(PythonClientE2E, PlannerExampleReadsTheGridAheadOfAMobileBase) {
 
   // The true walls in the maps' world frame (the start pose = the odometry frame), and the
   // ray from the corrected pose (centimetres from the truth here: MapsE2E) along its heading.
-  const auto gt0 = dataset::InterpolatePlanar(data.gt_base_pose, data.odometry.front().stamp_ns);
-  ASSERT_TRUE(gt0.has_value());
-  const auto& o0 = data.odometry.front();
-  const Eigen::Isometry2d T_start_gt =
-      (Pose(gt0->x, gt0->y, gt0->theta) * Pose(o0.x, o0.y, o0.theta).inverse()).inverse();
-  std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> walls;
-  for (const auto& w : data.walls) {
-    walls.emplace_back(T_start_gt * Eigen::Vector2d(w.x1, w.y1),
-                       T_start_gt * Eigen::Vector2d(w.x2, w.y2));
-  }
+  Eigen::Isometry2d T_maps_gt;
+  ASSERT_NO_FATAL_FAILURE(testing::GroundTruthToMaps(data, &T_maps_gt));
+  const auto walls = testing::WallsInMaps(data, T_maps_gt);
   const auto pose = map["pose_corrected"];
   const Eigen::Vector2d at(pose[0].as<double>(), pose[1].as<double>());
   const double heading = pose[2].as<double>();
