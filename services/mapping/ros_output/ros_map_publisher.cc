@@ -50,16 +50,27 @@ struct RosMapPublisher::Writers {
 
 RosMapPublisher::RosMapPublisher(const ServiceConfig& config, dds::Participant& participant,
                                  const SnapshotStore& snapshots, CounterSet& events)
-    : config_(config), snapshots_(snapshots), events_(events), writers_(new Writers) {
+    : config_(config),
+      participant_(participant),
+      snapshots_(snapshots),
+      events_(events),
+      writers_(new Writers) {
+  const bool maps_possible =
+      config_.maps.enabled && (config_.mode == "auto" || config_.mode == "mobile-base");
+  if (maps_possible && (!config_.topics.map.empty() || !config_.topics.tf.empty())) {
+    thread_ = std::thread([this] { Run(); });
+  }
+}
+
+void RosMapPublisher::CreateWriters() {
   if (!config_.topics.map.empty()) {
     // Depth 1, latched: a reader joining later gets the newest grid only.
-    writers_->map.emplace(participant, dds::RosTopic(config_.topics.map), 1,
+    writers_->map.emplace(participant_, dds::RosTopic(config_.topics.map), 1,
                           dds::Durability::kTransientLocal);
   }
   if (!config_.topics.tf.empty()) {
-    writers_->tf.emplace(participant, dds::RosTopic(config_.topics.tf), 100);
+    writers_->tf.emplace(participant_, dds::RosTopic(config_.topics.tf), 100);
   }
-  if (writers_->map || writers_->tf) thread_ = std::thread([this] { Run(); });
 }
 
 RosMapPublisher::~RosMapPublisher() {
@@ -86,6 +97,9 @@ void RosMapPublisher::Run() {
     } else {
       seen_frame = snapshot->frame_index;
       if (snapshot->maps) {
+        // The writers appear with the first maps: a head (or an `auto` service that never
+        // receives odometry) announces no rt/map or rt/tf that would stay silent.
+        if (!writers_->map && !writers_->tf) CreateWriters();
         if (snapshot->maps != published) {
           published = snapshot->maps;
           grid_pending = snapshot->maps;

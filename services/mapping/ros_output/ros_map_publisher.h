@@ -41,7 +41,9 @@ void ToRosGrid(const occupancy::GridExport& grid, int64_t stamp_ns, const std::s
 class RosMapPublisher {
  public:
   // Publishes on config.topics.map / .tf (an empty name: that one is off) through participant,
-  // counting in events: ros_map_published, ros_tf_published.
+  // counting in events: ros_map_published, ros_tf_published. The writers are created with the
+  // first snapshot that carries maps (mobile-base mode); in head or static mode, or with the
+  // maps disabled, nothing is created at all.
   RosMapPublisher(const ServiceConfig& config, dds::Participant& participant,
                   const SnapshotStore& snapshots, CounterSet& events);
   ~RosMapPublisher();  // stops the thread
@@ -53,11 +55,13 @@ class RosMapPublisher {
  private:
   struct Writers;
   void Run();
+  void CreateWriters();
   void PublishGrid(const mobile_mapping::MapsSnapshot& maps);  // rt/map
   // rt/tf: map -> odom from the newest key frame's correction, stamped stamp_ns.
   void PublishTransform(const mobile_mapping::MapsSnapshot& maps, int64_t stamp_ns);
 
   const ServiceConfig config_;
+  dds::Participant& participant_;
   const SnapshotStore& snapshots_;
   CounterSet& events_;
   std::unique_ptr<Writers> writers_;

@@ -4,9 +4,16 @@
 #include "services/mapping/ros_output/ros_map_publisher.h"
 
 #include <epmap_dds/OccupancyGrid.h>
+#include <epmap_dds/OccupancyGridPubSubTypes.h>
 #include <gtest/gtest.h>
 
+#include <atomic>
+#include <chrono>
 #include <numbers>
+#include <thread>
+
+#include "common/dds/endpoints.h"
+#include "tests/support/test_env.h"
 
 namespace epmap::mapping {
 namespace {
@@ -47,6 +54,66 @@ TEST(RosMapPublisher, MapToOdomCarriesTheOdometryPoseOntoTheCorrectedOne) {
   EXPECT_TRUE((T_map_odom * odometry).isApprox(corrected, 1e-12));
   // No correction: identity.
   EXPECT_TRUE(MapToOdom(odometry, odometry).isApprox(Eigen::Isometry2d::Identity(), 1e-12));
+}
+
+// A reader on rt/map, transient local as RViz's map display: how many writers it matched and
+// how many grids it got.
+struct MapListener {
+  explicit MapListener(dds::Participant& participant)
+      : reader(
+            participant, dds::RosTopic("map"), [this](nav_msgs::msg::OccupancyGrid&&) { ++grids; },
+            1u << 20, 1, dds::Durability::kTransientLocal) {}
+  std::atomic<int> grids{0};
+  dds::Reader<nav_msgs::msg::OccupancyGrid, nav_msgs::msg::OccupancyGridPubSubType> reader;
+};
+
+bool WaitFor(const std::function<bool()>& done, std::chrono::milliseconds timeout) {
+  const auto end = std::chrono::steady_clock::now() + timeout;
+  while (!done()) {
+    if (std::chrono::steady_clock::now() > end) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  return true;
+}
+
+// One processed frame whose snapshot carries maps with one known grid cell.
+std::shared_ptr<const MapSnapshot> FrameWithMaps(uint64_t frame_index) {
+  auto maps = std::make_shared<mobile_mapping::MapsSnapshot>();
+  maps->stamp_ns = 1'000'000'000;
+  maps->grid.AddPoint({0, 0, 0.5}, {1.0, 0.2, 0.5}, 0.02, occupancy::MeasurementParams{});
+  auto frame = std::make_shared<MapSnapshot>();
+  frame->frame_index = frame_index;
+  frame->stamp_ns = maps->stamp_ns;
+  frame->maps = std::move(maps);
+  return frame;
+}
+
+// A head announces no rt/map writer that would never publish; a mobile base creates it with
+// its first maps, and a reader that was already waiting then gets the grid.
+TEST(RosMapPublisher, TheWritersAppearWithTheFirstMapsOnly) {
+  dds::Participant participant(testing::UniqueDomainId(31), "ros_map_publisher_test");
+  MapListener listener(participant);
+  CounterSet events;
+  ServiceConfig config;
+  config.topics.map = "map";
+  config.topics.tf = "tf";
+  {
+    config.mode = "head";
+    SnapshotStore snapshots;
+    RosMapPublisher head(config, participant, snapshots, events);
+    snapshots.Publish(FrameWithMaps(1));  // even maps (never in head mode) create nothing
+    std::this_thread::sleep_for(std::chrono::milliseconds(500));
+    EXPECT_EQ(listener.reader.MatchedWriters(), 0);
+  }
+  config.mode = "auto";
+  SnapshotStore snapshots;
+  RosMapPublisher base(config, participant, snapshots, events);
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  EXPECT_EQ(listener.reader.MatchedWriters(), 0) << "no maps yet: no writer";
+  snapshots.Publish(FrameWithMaps(1));
+  EXPECT_TRUE(WaitFor([&] { return listener.grids > 0; }, std::chrono::seconds(10)));
+  EXPECT_EQ(listener.reader.MatchedWriters(), 1);
+  EXPECT_EQ(events.Get("ros_map_published"), 1u);
 }
 
 }  // namespace
