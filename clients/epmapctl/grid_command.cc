@@ -1,7 +1,7 @@
-// epmapctl grid --out grid.pgm|grid.png [--layer N]: the fuzzy occupancy grid of a mobile base
-// (issue 6), one height band or all combined. .pgm is written with a YAML beside it in the
-// layout ROS map_server loads (image, resolution, origin, negate, occupied_thresh,
-// free_thresh); .png is a picture for people.
+// epmapctl grid --out grid.pgm|grid.png [--layer N | --max-height M]: the fuzzy occupancy grid
+// of a mobile base (issue 6), one height band, the bands a robot M tall can hit, or all combined.
+// .pgm is written with a YAML beside it in the layout ROS map_server loads (image, resolution,
+// origin, negate, occupied_thresh, free_thresh); .png is a picture for people.
 
 #include <cstdio>
 #include <filesystem>
@@ -20,7 +20,24 @@ using epmap::ctl::ClientOptions;
 struct Args {
   std::string out;
   std::optional<uint32_t> layer;
+  std::optional<double> max_height_m;
 };
+
+// What the grid holds, for the summary line: "layer 1 (0.70-1.30 m)", "all layers combined" or
+// "layers 0-0 combined (0.10-0.70 m)".
+std::string Describe(const epmap::occupancy::GridExport& e) {
+  const auto& b = e.layer_bounds_m;
+  const auto band = [&](uint32_t lo, uint32_t hi) {
+    if (lo > hi || hi + 1 >= b.size()) return std::string();  // no bounds sent
+    char text[64];
+    std::snprintf(text, sizeof text, " (%.2f-%.2f m)", b[lo], b[hi + 1]);
+    return std::string(text);
+  };
+  if (!e.combined) return "layer " + std::to_string(e.layer) + band(e.layer, e.layer);
+  if (e.combined_layers == 0 || e.combined_layers >= e.layer_count) return "all layers combined";
+  return "layers 0-" + std::to_string(e.combined_layers - 1) + " combined" +
+         band(0, e.combined_layers - 1);
+}
 
 epmap::occupancy::GridExport FromProto(const epmap::v1::OccupancyGrid& g) {
   epmap::occupancy::GridExport e;
@@ -33,6 +50,7 @@ epmap::occupancy::GridExport FromProto(const epmap::v1::OccupancyGrid& g) {
   e.layer_bounds_m.assign(g.layer_bounds_m().begin(), g.layer_bounds_m().end());
   e.combined = g.combined();
   e.layer = g.layer();
+  e.combined_layers = g.combined_layers();
   e.occupancy.assign(g.occupancy().begin(), g.occupancy().end());
   e.confidence.assign(g.confidence().begin(), g.confidence().end());
   return e;
@@ -54,6 +72,7 @@ int Run(const ClientOptions& options, const Args& args) {
   auto stub = epmap::v1::MapService::NewStub(options.Channel());
   epmap::v1::GetOccupancyGridRequest request;
   if (args.layer) request.set_layer(*args.layer);
+  if (args.max_height_m) request.set_max_height_m(*args.max_height_m);
   epmap::v1::OccupancyGrid grid;
   const auto context = options.Context();
   const grpc::Status rpc = stub->GetOccupancyGrid(context.get(), request, &grid);
@@ -79,8 +98,7 @@ int Run(const ClientOptions& options, const Args& args) {
   }
   std::printf("wrote %s%s%s: %ux%u cells of %.3f m, origin (%.3f, %.3f), %s (stamp %lld ns)%s\n",
               out.string().c_str(), yaml.empty() ? "" : " and ", yaml.string().c_str(), e.width,
-              e.height, e.resolution_m, e.origin_x, e.origin_y,
-              e.combined ? "all layers combined" : ("layer " + std::to_string(e.layer)).c_str(),
+              e.height, e.resolution_m, e.origin_x, e.origin_y, Describe(e).c_str(),
               static_cast<long long>(grid.stamp_ns()),
               grid.includes_open_stop() ? ", with the stop under way (provisional)" : "");
   return 0;
@@ -91,7 +109,11 @@ void Setup(CLI::App& app, ClientOptions& options) {
   auto args = std::make_shared<Args>();
   cmd->add_option("--out", args->out, "FILE.pgm (+ FILE.yaml, ROS map_server) or FILE.png")
       ->required();
-  cmd->add_option("--layer", args->layer, "height band (0 = lowest); default: all combined");
+  auto* layer =
+      cmd->add_option("--layer", args->layer, "height band (0 = lowest); default: all combined");
+  cmd->add_option("--max-height", args->max_height_m,
+                  "the bands a robot this tall (m) can hit, combined (those starting below it)")
+      ->excludes(layer);
   cmd->callback([&options, args] { options.exit_code = Run(options, *args); });
 }
 

@@ -78,12 +78,16 @@ def free_ahead(grid, pose, max_m=20.0):
     return max_m, "max_range"
 
 
-def grid_summary(stub, pb2):
-    """The corrected pose and the combined grid, or None when the service has no maps yet."""
+def grid_summary(stub, pb2, robot_height_m=None):
+    """The corrected pose and the grid (combined over every band, or over the bands a robot
+    robot_height_m tall can hit), or {"unavailable": why} when the service has no maps yet."""
     import grpc  # noqa: E402
+    request = pb2.GetOccupancyGridRequest()
+    if robot_height_m is not None:
+        request.max_height_m = robot_height_m
     try:
         pose = stub.GetPose(pb2.GetPoseRequest(), timeout=10)
-        grid = stub.GetOccupancyGrid(pb2.GetOccupancyGridRequest(), timeout=30)
+        grid = stub.GetOccupancyGrid(request, timeout=30)
     except grpc.RpcError as error:
         if error.code() == grpc.StatusCode.FAILED_PRECONDITION:
             return {"unavailable": error.details()}
@@ -99,6 +103,10 @@ def grid_summary(stub, pb2):
         "height": grid.height,
         "resolution_m": round(grid.resolution_m, 4),
         "origin_m": [round(grid.origin.x, 3), round(grid.origin.y, 3)],
+        # The height bands the grid combines, from the floor up (m above it).
+        "bands_m": [round(grid.layer_bounds_m[0], 3),
+                    round(grid.layer_bounds_m[grid.combined_layers], 3)],
+        "combined_layers": grid.combined_layers,
         "known_cells": known,
         "occupied_cells": occupied,
         "pose_corrected": [round(c.x, 3), round(c.y, 3), round(c.theta, 4)],
@@ -114,6 +122,9 @@ def main():
     parser.add_argument("--server", default="127.0.0.1:50051")
     parser.add_argument("--stubs", default=os.path.join(here, "..", "..", "build", "python"))
     parser.add_argument("--wait-ms", type=int, default=10000)
+    parser.add_argument("--robot-height", type=float, default=None, metavar="M",
+                        help="mobile base: plan on the grid bands a robot this tall can hit "
+                             "(default: every band)")
     args = parser.parse_args()
 
     import grpc  # noqa: E402
@@ -161,7 +172,7 @@ def main():
     }
     if status.mode == "mobile-base":
         try:
-            result["map"] = grid_summary(stub, pb2)
+            result["map"] = grid_summary(stub, pb2, args.robot_height)
         except grpc.RpcError as error:
             print("epmap_planner: %s: %s" % (error.code().name, error.details()), file=sys.stderr)
             return 1

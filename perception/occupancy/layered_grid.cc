@@ -269,10 +269,11 @@ Cell LayeredGrid::At(int layer, int64_t ix, int64_t iy) const {
   return {L.empty.at<float>(r, c), L.occupied.at<float>(r, c), L.confidence.at<float>(r, c)};
 }
 
-Cell LayeredGrid::Combined(int64_t ix, int64_t iy) const {
+Cell LayeredGrid::Combined(int64_t ix, int64_t iy, int first_layers) const {
+  CheckFirstLayers(first_layers);
   Cell out;
   float max_empty = 0;
-  for (int l = 0; l < layer_count(); ++l) {
+  for (int l = 0; l < first_layers; ++l) {
     const Cell c = At(l, ix, iy);
     out.occupied = std::max(out.occupied, c.occupied);
     max_empty = std::max(max_empty, c.empty);
@@ -280,6 +281,23 @@ Cell LayeredGrid::Combined(int64_t ix, int64_t iy) const {
   }
   out.empty = std::min(max_empty, 1.0F - out.occupied);
   return out;
+}
+
+void LayeredGrid::CheckFirstLayers(int first_layers) const {
+  if (first_layers < 1 || first_layers > layer_count()) {
+    throw std::out_of_range("occupancy grid: cannot combine the lowest " +
+                            std::to_string(first_layers) + " layers (the grid has " +
+                            std::to_string(layer_count()) + ")");
+  }
+}
+
+int LayeredGrid::LayersBelow(double height_m) const {
+  if (!std::isfinite(height_m)) return 0;
+  int n = 0;
+  for (int l = 0; l < layer_count(); ++l) {
+    if (params_.layer_bounds_m[static_cast<size_t>(l)] < height_m) n = l + 1;
+  }
+  return n;
 }
 
 cv::Mat LayeredGrid::SyntheticMap() const {
@@ -293,16 +311,15 @@ cv::Mat LayeredGrid::SyntheticMap() const {
   return m;
 }
 
-GridExport LayeredGrid::Export(std::optional<int> layer, double unknown_below) const {
-  if (layer) CheckLayer(*layer);
-  // The cells of the layer (or the combined map), and the box around the known ones: the
-  // export is cropped to it, one unknown cell of margin around.
+template <typename CellAt>
+GridExport LayeredGrid::ExportCells(const CellAt& cell_at, double unknown_below) const {
+  // The cells, and the box around the known ones: the export is cropped to it, one unknown
+  // cell of margin around.
   std::vector<Cell> cells(static_cast<size_t>(width_) * static_cast<size_t>(height_));
   int c_lo = width_, c_hi = -1, r_lo = height_, r_hi = -1;
   for (int r = 0; r < height_; ++r) {
     for (int c = 0; c < width_; ++c) {
-      const Cell cell =
-          layer ? At(*layer, min_ix_ + c, min_iy_ + r) : Combined(min_ix_ + c, min_iy_ + r);
+      const Cell cell = cell_at(min_ix_ + c, min_iy_ + r);
       cells[static_cast<size_t>(r) * static_cast<size_t>(width_) + static_cast<size_t>(c)] = cell;
       if (cell.confidence >= unknown_below) {
         c_lo = std::min(c_lo, c);
@@ -329,8 +346,6 @@ GridExport LayeredGrid::Export(std::optional<int> layer, double unknown_below) c
   e.height = static_cast<uint32_t>(r_hi - r_lo + 1);
   e.layer_count = static_cast<uint32_t>(layer_count());
   e.layer_bounds_m = params_.layer_bounds_m;
-  e.combined = !layer.has_value();
-  e.layer = layer ? static_cast<uint32_t>(*layer) : 0;
   const size_t n = static_cast<size_t>(e.width) * e.height;
   e.occupancy.assign(n, GridExport::kUnknown);
   e.confidence.assign(n, 0);
@@ -347,6 +362,25 @@ GridExport LayeredGrid::Export(std::optional<int> layer, double unknown_below) c
       e.occupancy[i] = static_cast<uint8_t>(std::lround(occ));
     }
   }
+  return e;
+}
+
+GridExport LayeredGrid::Export(std::optional<int> layer, double unknown_below) const {
+  if (!layer) return ExportBelow(layer_count(), unknown_below);
+  CheckLayer(*layer);
+  GridExport e =
+      ExportCells([&](int64_t ix, int64_t iy) { return At(*layer, ix, iy); }, unknown_below);
+  e.combined = false;
+  e.layer = static_cast<uint32_t>(*layer);
+  return e;
+}
+
+GridExport LayeredGrid::ExportBelow(int first_layers, double unknown_below) const {
+  CheckFirstLayers(first_layers);
+  GridExport e = ExportCells([&](int64_t ix, int64_t iy) { return Combined(ix, iy, first_layers); },
+                             unknown_below);
+  e.combined = true;
+  e.combined_layers = static_cast<uint32_t>(first_layers);
   return e;
 }
 

@@ -80,6 +80,9 @@ struct GridExport {
   std::vector<double> layer_bounds_m;
   bool combined = true;
   uint32_t layer = 0;
+  // combined: the number of bands it combines, from the floor up (layer_count for all of them;
+  // fewer for the obstacles a robot of some height can hit, ExportBelow).
+  uint32_t combined_layers = 0;
   // Row-major from the lowest y row. occupancy 0..100 = 50 + 50 (mu_O - mu_E), 255 = unknown
   // (confidence below the export threshold); confidence 0..255 = 255 kappa.
   std::vector<uint8_t> occupancy;
@@ -129,7 +132,12 @@ class LayeredGrid {
   Cell At(int layer, int64_t ix, int64_t iy) const;
   // The combined map over the layers: occupied if any layer is, empty where some layer was
   // seen empty and none is occupied: O = max_l O_l, E = min(max_l E_l, 1 - O), K = max_l K_l.
-  Cell Combined(int64_t ix, int64_t iy) const;
+  Cell Combined(int64_t ix, int64_t iy) const { return Combined(ix, iy, layer_count()); }
+  // The same over the lowest `first_layers` layers only (0 < first_layers <= layer_count()).
+  Cell Combined(int64_t ix, int64_t iy, int first_layers) const;
+  // How many bands start below height_m above the floor: the ones in which a robot that tall
+  // can hit something (0 when height_m is not above the lowest band's floor, or not finite).
+  int LayersBelow(double height_m) const;
   // Lattice cell of a world point.
   int64_t CellX(double x) const;
   int64_t CellY(double y) const;
@@ -142,6 +150,9 @@ class LayeredGrid {
   // (plus one cell). Throws std::out_of_range for a layer that does not exist. Cells with
   // confidence below unknown_below are unknown.
   GridExport Export(std::optional<int> layer = std::nullopt, double unknown_below = 0.05) const;
+  // Export of the combined map over the lowest `first_layers` layers (see Combined); throws
+  // std::out_of_range unless 0 < first_layers <= layer_count().
+  GridExport ExportBelow(int first_layers, double unknown_below = 0.05) const;
 
   // Weighted averaging of a registered local map into this one (paper 002, Sec. 4, as [16]):
   // each cell's memberships become the confidence-weighted mean of the two, its confidence the
@@ -157,6 +168,10 @@ class LayeredGrid {
   };
   void EnsureCovers(int64_t ix_lo, int64_t iy_lo, int64_t ix_hi, int64_t iy_hi);
   void CheckLayer(int layer) const;
+  void CheckFirstLayers(int first_layers) const;
+  // The export of whatever cell(ix, iy) gives, cropped to its known cells plus one.
+  template <typename CellAt>
+  GridExport ExportCells(const CellAt& cell_at, double unknown_below) const;
 
   GridParams params_;
   std::vector<Layer> layers_;

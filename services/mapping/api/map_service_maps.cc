@@ -1,11 +1,14 @@
 // MapService's mobile-base RPCs (issue 6): the perceptual map, the occupancy grid and the pose
 // from the newest snapshot's maps (services/mapping/pipeline/pipeline_maps.cc). Errors:
 // FAILED_PRECONDITION when the service is not in mobile-base mode or no key frame has made a
-// map yet, INVALID_ARGUMENT for a layer the grid does not have.
+// map yet, INVALID_ARGUMENT for a layer the grid does not have, a max_height_m below its lowest
+// band, or both at once.
 
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+
+#include <spdlog/fmt/fmt.h>
 
 #include "services/mapping/api/map_service.h"
 #include "services/mapping/service.h"
@@ -91,6 +94,12 @@ grpc::Status MapServiceImpl::GetOccupancyGrid(grpc::ServerContext*,
   if (auto status = LatestMaps(service_, &maps); !status.ok()) return status;
   const int layers = maps->grid.layer_count();
   std::optional<int> layer;
+  int first_layers = layers;  // the combined map's bands, from the floor up
+  if (request->has_layer() && request->has_max_height_m()) {
+    return {grpc::StatusCode::INVALID_ARGUMENT,
+            "give a layer or max_height_m, not both (a layer is one band; max_height_m combines "
+            "the bands a robot that tall can hit)"};
+  }
   if (request->has_layer()) {
     if (request->layer() >= static_cast<uint32_t>(layers)) {
       return {grpc::StatusCode::INVALID_ARGUMENT,
@@ -100,7 +109,18 @@ grpc::Status MapServiceImpl::GetOccupancyGrid(grpc::ServerContext*,
     }
     layer = static_cast<int>(request->layer());
   }
-  const occupancy::GridExport g = maps->grid.Export(layer);
+  if (request->has_max_height_m()) {
+    first_layers = maps->grid.LayersBelow(request->max_height_m());
+    if (first_layers == 0) {
+      const double floor_m = maps->grid.params().layer_bounds_m.front();
+      return {grpc::StatusCode::INVALID_ARGUMENT,
+              fmt::format("max_height_m {} must be a number above the lowest band's floor, {} m "
+                          "above the floor (below it the grid has nothing to hit)",
+                          request->max_height_m(), floor_m)};
+    }
+  }
+  const occupancy::GridExport g =
+      layer ? maps->grid.Export(layer) : maps->grid.ExportBelow(first_layers);
   if (g.width == 0 || g.height == 0) {
     // A stop's points join the grid once the stop would make a view (provisionally while the
     // base stands, for good when it moves on); an empty map is no map.
@@ -121,6 +141,7 @@ grpc::Status MapServiceImpl::GetOccupancyGrid(grpc::ServerContext*,
   for (double b : g.layer_bounds_m) out->add_layer_bounds_m(b);
   out->set_combined(g.combined);
   out->set_layer(g.layer);
+  out->set_combined_layers(g.combined_layers);
   out->set_occupancy(g.occupancy.data(), g.occupancy.size());
   out->set_confidence(g.confidence.data(), g.confidence.size());
   return grpc::Status::OK;

@@ -16,6 +16,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <memory>
 #include <mutex>
 #include <numbers>
@@ -172,6 +173,35 @@ TEST(MapsE2E, BuildingRunGivesMapsNearTheTrueWalls) {
     EXPECT_NE(bad_code, 0);
     EXPECT_NE(bad_out.find("INVALID_ARGUMENT"), std::string::npos) << bad_out;
     EXPECT_NE(bad_out.find("layer 99"), std::string::npos) << bad_out;
+
+    // What a robot 0.5 m tall can hit: the lowest band alone. Over every band (a robot taller
+    // than the top band): the combined map, byte for byte.
+    const auto [low_code, low_out] =
+        Ctl(epmapd, work, {"grid", "--out", (work / "low.pgm").string(), "--max-height", "0.5"});
+    ASSERT_EQ(low_code, 0) << low_out;
+    EXPECT_NE(low_out.find("layers 0-0 combined (0.10-0.70 m)"), std::string::npos) << low_out;
+    EXPECT_FALSE(cv::imread((work / "low.pgm").string(), cv::IMREAD_UNCHANGED).empty());
+    const auto grid_below = [&](std::optional<double> max_height_m) {
+      grpc::ClientContext context;
+      v1::GetOccupancyGridRequest request;
+      if (max_height_m) request.set_max_height_m(*max_height_m);
+      v1::OccupancyGrid grid;
+      EXPECT_TRUE(epmapd.stub().GetOccupancyGrid(&context, request, &grid).ok());
+      return grid;
+    };
+    const v1::OccupancyGrid all = grid_below(std::nullopt), tall = grid_below(5.0),
+                            low = grid_below(0.5);
+    EXPECT_EQ(all.combined_layers(), 3u);
+    EXPECT_EQ(tall.combined_layers(), 3u);
+    EXPECT_EQ(tall.occupancy(), all.occupancy());
+    EXPECT_EQ(low.combined_layers(), 1u);
+    EXPECT_TRUE(low.combined());
+    EXPECT_NE(low.occupancy(), all.occupancy()) << "desks and chairs stand above 0.7 m";
+    const auto [both_code, both_out] =
+        Ctl(epmapd, work,
+            {"grid", "--out", (work / "both.pgm").string(), "--layer", "0", "--max-height", "0.5"});
+    EXPECT_NE(both_code, 0) << both_out;
+    EXPECT_FALSE(std::filesystem::exists(work / "both.pgm"));
   }
 
   // Pose: the corrected pose near the truth at the same odometry reading, difference finite.
@@ -494,6 +524,24 @@ TEST_F(MapsFromPublishedFrames, BadInputIsCountedAndTheMapsStayIntact) {
   EXPECT_EQ(bad_layer.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
   EXPECT_NE(bad_layer.error_message().find("layers 0..2"), std::string::npos)
       << bad_layer.error_message();
+  // A height with no band below it, not a number, or given with a layer: INVALID_ARGUMENT.
+  for (const double max_height_m : {0.05, -1.0, std::numeric_limits<double>::quiet_NaN()}) {
+    grpc::ClientContext context;
+    v1::GetOccupancyGridRequest below;
+    below.set_max_height_m(max_height_m);
+    const auto status = epmapd.stub().GetOccupancyGrid(&context, below, &grid);
+    EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << max_height_m;
+    EXPECT_NE(status.error_message().find("lowest band's floor, 0.1 m"), std::string::npos)
+        << status.error_message();
+  }
+  grpc::ClientContext both_context;
+  v1::GetOccupancyGridRequest both;
+  both.set_layer(0);
+  both.set_max_height_m(1.0);
+  const auto both_status = epmapd.stub().GetOccupancyGrid(&both_context, both, &grid);
+  EXPECT_EQ(both_status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_NE(both_status.error_message().find("not both"), std::string::npos)
+      << both_status.error_message();
 }
 
 // A robot that stops and looks around: while the base stands, the maps served already hold

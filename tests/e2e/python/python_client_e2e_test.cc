@@ -7,6 +7,8 @@
 #include <Eigen/Geometry>
 #include <cmath>
 #include <limits>
+#include <string>
+#include <vector>
 
 #include "common/dataset/dataset.h"
 #include "tests/support/building_run.h"
@@ -16,13 +18,15 @@ namespace epmap {
 namespace {
 
 // clients/python/epmap_planner.py against epmapd, with the stubs the build generated.
-std::pair<int, std::string> RunPlanner(testing::Epmapd& epmapd, const std::filesystem::path& work) {
+std::pair<int, std::string> RunPlanner(testing::Epmapd& epmapd, const std::filesystem::path& work,
+                                       const std::vector<std::string>& extra = {}) {
   const auto script = testing::SourceDir() / "clients/python/epmap_planner.py";
   const auto stubs = testing::BinDir().parent_path() / "python";
-  return testing::RunToCompletion(
-      "/usr/bin/python3",
-      {script.string(), "--server", epmapd.address(), "--stubs", stubs.string()},
-      work / "python.log", std::chrono::seconds(60));
+  std::vector<std::string> args = {script.string(), "--server", epmapd.address(), "--stubs",
+                                   stubs.string()};
+  args.insert(args.end(), extra.begin(), extra.end());
+  return testing::RunToCompletion("/usr/bin/python3", args, work / "python.log",
+                                  std::chrono::seconds(60));
 }
 
 TEST(PythonClientE2E, PlannerExampleReadsDepthAhead) {
@@ -119,6 +123,30 @@ TEST(PythonClientE2E, PlannerExampleReadsTheGridAheadOfAMobileBase) {
   // through the door. (Measured: it ends 3.3 m ahead, at uncertain cells in the far corridor
   // wall's door; the first true wall on the ray is in the room beyond, 16.7 m ahead.)
   EXPECT_GE(free_ahead, 1.5) << out;
+  EXPECT_EQ(map["combined_layers"].as<uint32_t>(), grid.combined_layers());
+
+  // A robot 0.5 m tall plans on the lowest band alone (0.10-0.70 m): the service's grid over
+  // that band, and still never free through a wall.
+  const auto [low_code, low_out] = RunPlanner(epmapd, work, {"--robot-height", "0.5"});
+  ASSERT_EQ(low_code, 0) << low_out;
+  const YAML::Node low = YAML::Load(low_out)["map"];
+  ASSERT_TRUE(low && low["free_ahead_m"]) << low_out;
+  EXPECT_EQ(low["combined_layers"].as<uint32_t>(), 1u) << low_out;
+  EXPECT_NEAR(low["bands_m"][1].as<double>(), 0.7, 1e-9) << low_out;
+  grpc::ClientContext low_context;
+  v1::GetOccupancyGridRequest low_request;
+  low_request.set_max_height_m(0.5);
+  v1::OccupancyGrid low_grid;
+  ASSERT_TRUE(epmapd.stub().GetOccupancyGrid(&low_context, low_request, &low_grid).ok());
+  EXPECT_EQ(low["width"].as<uint32_t>(), low_grid.width());
+  EXPECT_EQ(low["height"].as<uint32_t>(), low_grid.height());
+  const double low_free = low["free_ahead_m"].as<double>();
+  std::printf("robot 0.5 m tall: free ahead %.2f m (%s)\n", low_free,
+              low["free_ahead_ends"].as<std::string>().c_str());
+  EXPECT_LE(low_free, to_wall + 0.3) << low_out;
+  const auto [bad_code, bad_out] = RunPlanner(epmapd, work, {"--robot-height", "0.05"});
+  EXPECT_NE(bad_code, 0);
+  EXPECT_NE(bad_out.find("INVALID_ARGUMENT"), std::string::npos) << bad_out;
   if (!HasFailure()) std::filesystem::remove_all(work);
 }
 

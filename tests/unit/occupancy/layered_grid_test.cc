@@ -1,5 +1,8 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <limits>
+
 #include "perception/occupancy/layered_grid.h"
 
 namespace epmap {
@@ -141,6 +144,40 @@ TEST(LayeredGrid, CombinedMapAndSyntheticMap) {
                                 std::min(g.At(1, 20, 0).occupied, g.At(1, 20, 0).confidence));
   EXPECT_FLOAT_EQ(m.at<float>(row, col), expect);
   EXPECT_EQ(m.at<float>(row, static_cast<int>(10 - g.min_ix())), 0.0F);  // empty cell
+}
+
+// A table top at 0.75 m stops a tall robot, not one 0.5 m high: the export over the bands a
+// robot can hit leaves out what stands above it, and over every band it is the combined map.
+TEST(LayeredGrid, TheBandsARobotCanHitLeaveOutWhatIsAboveIt) {
+  LayeredGrid g;
+  const occupancy::MeasurementParams mp;
+  for (int k = 0; k < 5; ++k) g.AddPoint({0.05, 0.05, 0.4}, {3.05, 0.05, 0.4}, 0.01, mp);
+  for (int k = 0; k < 5; ++k) g.AddPoint({0.05, 0.05, 0.75}, {1.55, 0.05, 0.75}, 0.01, mp);
+  EXPECT_EQ(g.LayersBelow(0.05), 0);  // not above the lowest band's floor: nothing to hit
+  EXPECT_EQ(g.LayersBelow(0.5), 1);
+  EXPECT_EQ(g.LayersBelow(0.7), 1);  // a band starting at the robot's top is out of reach
+  EXPECT_EQ(g.LayersBelow(0.71), 2);
+  EXPECT_EQ(g.LayersBelow(9.0), 3);
+  EXPECT_EQ(g.LayersBelow(std::numeric_limits<double>::quiet_NaN()), 0);
+
+  const auto at = [](const occupancy::GridExport& e, double x, double y) {
+    const auto c = static_cast<uint32_t>(std::floor((x - e.origin_x) / e.resolution_m));
+    const auto r = static_cast<uint32_t>(std::floor((y - e.origin_y) / e.resolution_m));
+    return e.occupancy[r * e.width + c];
+  };
+  const auto low = g.ExportBelow(g.LayersBelow(0.5));
+  const auto all = g.Export();
+  EXPECT_TRUE(low.combined);
+  EXPECT_EQ(low.combined_layers, 1u);
+  EXPECT_EQ(all.combined_layers, 3u);
+  EXPECT_GT(at(all, 1.55, 0.05), 65) << "the table top is an obstacle in the combined map";
+  EXPECT_LT(at(low, 1.55, 0.05), 20) << "a low robot passes under it: free below 0.7 m";
+  EXPECT_GT(at(low, 3.05, 0.05), 65) << "the low obstacle stays";
+  const auto every = g.ExportBelow(g.layer_count());
+  EXPECT_EQ(every.occupancy, all.occupancy);
+  EXPECT_EQ(every.confidence, all.confidence);
+  EXPECT_THROW(g.ExportBelow(0), std::out_of_range);
+  EXPECT_THROW(g.ExportBelow(4), std::out_of_range);
 }
 
 TEST(LayeredGrid, AQueryForALayerThatDoesNotExistIsAClearErrorAndChangesNothing) {
