@@ -15,9 +15,11 @@ struct TopicNames {
   std::string odom = "rt/odom";
   std::string eye_hand_samples = "rt/epmap/eye_hand_samples";
   // What epmapd publishes in mobile-base mode (empty: not published): the occupancy grid as
-  // nav_msgs/OccupancyGrid (transient local, as map_server) and map -> odom on tf.
+  // nav_msgs/OccupancyGrid (transient local, as map_server), map -> odom on tf, and the
+  // perceptual map as visualization_msgs/MarkerArray for RViz.
   std::string map = "rt/map";
   std::string tf = "rt/tf";
+  std::string perceptual_map = "rt/epmap/perceptual_map";
 };
 
 }  // namespace epmap::dds

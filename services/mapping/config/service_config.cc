@@ -89,6 +89,7 @@ void Apply(const YAML::Node& root, ServiceConfig& c) {
     t.Get("eye_hand_samples", c.topics.eye_hand_samples);
     t.Get("map", c.topics.map);
     t.Get("tf", c.topics.tf);
+    t.Get("perceptual_map", c.topics.perceptual_map);
     t.RejectUnknownKeys();
     s.RejectUnknownKeys();
   }
@@ -330,6 +331,7 @@ std::string ToYaml(const ServiceConfig& c) {
   out << YAML::Key << "eye_hand_samples" << YAML::Value << c.topics.eye_hand_samples;
   out << YAML::Key << "map" << YAML::Value << c.topics.map;
   out << YAML::Key << "tf" << YAML::Value << c.topics.tf;
+  out << YAML::Key << "perceptual_map" << YAML::Value << c.topics.perceptual_map;
   out << YAML::EndMap << YAML::EndMap;
   out << YAML::Key << "ingest" << YAML::Value << YAML::BeginMap;
   out << YAML::Key << "pair_tolerance_ms" << YAML::Value << c.pair_tolerance_ns / 1e6;

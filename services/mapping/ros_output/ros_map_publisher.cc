@@ -1,5 +1,6 @@
 #include "services/mapping/ros_output/ros_map_publisher.h"
 
+#include <epmap_dds/MarkerArrayPubSubTypes.h>
 #include <epmap_dds/OccupancyGridPubSubTypes.h>
 #include <epmap_dds/TFMessagePubSubTypes.h>
 #include <spdlog/spdlog.h>
@@ -10,6 +11,7 @@
 
 #include "common/dds/endpoints.h"
 #include "common/dds/ros_conversions.h"
+#include "services/mapping/ros_output/perceptual_map_markers.h"
 
 namespace epmap::mapping {
 
@@ -46,6 +48,10 @@ struct RosMapPublisher::Writers {
   std::optional<dds::Writer<nav_msgs::msg::OccupancyGrid, nav_msgs::msg::OccupancyGridPubSubType>>
       map;
   std::optional<dds::Writer<tf2_msgs::msg::TFMessage, tf2_msgs::msg::TFMessagePubSubType>> tf;
+  std::optional<dds::Writer<visualization_msgs::msg::MarkerArray,
+                            visualization_msgs::msg::MarkerArrayPubSubType>>
+      markers;
+  bool created() const { return map || tf || markers; }
 };
 
 RosMapPublisher::RosMapPublisher(const ServiceConfig& config, dds::Participant& participant,
@@ -57,7 +63,8 @@ RosMapPublisher::RosMapPublisher(const ServiceConfig& config, dds::Participant& 
       writers_(new Writers) {
   const bool maps_possible =
       config_.maps.enabled && (config_.mode == "auto" || config_.mode == "mobile-base");
-  if (maps_possible && (!config_.topics.map.empty() || !config_.topics.tf.empty())) {
+  if (maps_possible && (!config_.topics.map.empty() || !config_.topics.tf.empty() ||
+                        !config_.topics.perceptual_map.empty())) {
     thread_ = std::thread([this] { Run(); });
   }
 }
@@ -70,6 +77,11 @@ void RosMapPublisher::CreateWriters() {
   }
   if (!config_.topics.tf.empty()) {
     writers_->tf.emplace(participant_, dds::RosTopic(config_.topics.tf), 100);
+  }
+  if (!config_.topics.perceptual_map.empty()) {
+    // Latched as the grid: RViz started later still draws the newest map.
+    writers_->markers.emplace(participant_, dds::RosTopic(config_.topics.perceptual_map), 1,
+                              dds::Durability::kTransientLocal);
   }
 }
 
@@ -99,7 +111,7 @@ void RosMapPublisher::Run() {
       if (snapshot->maps) {
         // The writers appear with the first maps: a head (or an `auto` service that never
         // receives odometry) announces no rt/map or rt/tf that would stay silent.
-        if (!writers_->map && !writers_->tf) CreateWriters();
+        if (!writers_->created()) CreateWriters();
         if (snapshot->maps != published) {
           published = snapshot->maps;
           grid_pending = snapshot->maps;
@@ -108,10 +120,11 @@ void RosMapPublisher::Run() {
         PublishTransform(*snapshot->maps, std::max(snapshot->stamp_ns, snapshot->maps->stamp_ns));
       }
     }
-    // The grid at most once a period, the newest one; a change that arrives within the period
-    // goes out when it ends.
+    // The grid (and the perceptual map beside it) at most once a period, the newest one; a
+    // change that arrives within the period goes out when it ends.
     if (grid_pending && Clock::now() - last_grid >= period) {
       PublishGrid(*grid_pending);
+      PublishMarkers(*grid_pending);
       grid_pending.reset();
       last_grid = Clock::now();
     }
@@ -128,6 +141,18 @@ void RosMapPublisher::PublishGrid(const mobile_mapping::MapsSnapshot& maps) {
     events_.Increment("ros_map_published");
   } else {
     spdlog::warn("rt/map: the grid ({}x{}) could not be written", g.width, g.height);
+  }
+}
+
+void RosMapPublisher::PublishMarkers(const mobile_mapping::MapsSnapshot& maps) {
+  if (!writers_->markers) return;
+  visualization_msgs::msg::MarkerArray msg;
+  ToRosMarkers(maps.perceptual, maps.stamp_ns, config_.maps.map_frame, &msg);
+  if (writers_->markers->Write(msg)) {
+    events_.Increment("ros_perceptual_map_published");
+  } else {
+    spdlog::warn("{}: the perceptual map ({} segments) could not be written",
+                 config_.topics.perceptual_map, maps.perceptual.segments.size());
   }
 }
 

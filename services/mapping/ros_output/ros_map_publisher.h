@@ -6,7 +6,8 @@
 // nav2 and RViz place the odometry in the map). A thread of its own follows the snapshots; the
 // pipeline never waits for DDS. The correction changes at key frames only, but map -> odom goes
 // out with every processed frame, stamped with that frame's time: tf lookups at sensor time
-// then never extrapolate past the last key frame while the robot stands still.
+// then never extrapolate past the last key frame while the robot stands still. With each grid
+// the perceptual map goes out as a visualization_msgs/MarkerArray (perceptual_map_markers.h).
 
 #include <Eigen/Geometry>
 #include <atomic>
@@ -40,8 +41,9 @@ void ToRosGrid(const occupancy::GridExport& grid, int64_t stamp_ns, const std::s
 
 class RosMapPublisher {
  public:
-  // Publishes on config.topics.map / .tf (an empty name: that one is off) through participant,
-  // counting in events: ros_map_published, ros_tf_published. The writers are created with the
+  // Publishes on config.topics.map / .tf / .perceptual_map (an empty name: that one is off)
+  // through participant, counting in events: ros_map_published, ros_tf_published,
+  // ros_perceptual_map_published. The writers are created with the
   // first snapshot that carries maps (mobile-base mode); in head or static mode, or with the
   // maps disabled, nothing is created at all.
   RosMapPublisher(const ServiceConfig& config, dds::Participant& participant,
@@ -56,7 +58,8 @@ class RosMapPublisher {
   struct Writers;
   void Run();
   void CreateWriters();
-  void PublishGrid(const mobile_mapping::MapsSnapshot& maps);  // rt/map
+  void PublishGrid(const mobile_mapping::MapsSnapshot& maps);     // rt/map
+  void PublishMarkers(const mobile_mapping::MapsSnapshot& maps);  // the perceptual map, for RViz
   // rt/tf: map -> odom from the newest key frame's correction, stamped stamp_ns.
   void PublishTransform(const mobile_mapping::MapsSnapshot& maps, int64_t stamp_ns);
 

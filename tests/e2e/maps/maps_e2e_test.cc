@@ -8,6 +8,7 @@
 #include <epmap_dds/CameraInfoPubSubTypes.h>
 #include <epmap_dds/ImagePubSubTypes.h>
 #include <epmap_dds/JointStatePubSubTypes.h>
+#include <epmap_dds/MarkerArrayPubSubTypes.h>
 #include <epmap_dds/OccupancyGridPubSubTypes.h>
 #include <epmap_dds/OdometryPubSubTypes.h>
 #include <epmap_dds/TFMessagePubSubTypes.h>
@@ -289,6 +290,63 @@ TEST(MapsE2E, BuildingRunGivesMapsNearTheTrueWalls) {
     EXPECT_GT(occupied, 20u);
     std::printf("rt/map: %ux%u, %zu unknown, %zu occupied (>= 65), same as GetOccupancyGrid\n",
                 grid->info().width(), grid->info().height(), unknown, occupied);
+
+    // The perceptual map for RViz, latched too: the segments GetPerceptualMap serves, end for
+    // end, and the path.
+    grpc::ClientContext pmap_context;
+    v1::PerceptualMap pmap;
+    ASSERT_TRUE(epmapd.stub().GetPerceptualMap(&pmap_context, {}, &pmap).ok());
+    std::mutex markers_mutex;
+    std::optional<visualization_msgs::msg::MarkerArray> markers;
+    dds::Reader<visualization_msgs::msg::MarkerArray,
+                visualization_msgs::msg::MarkerArrayPubSubType>
+        markers_reader(
+            ros_side, "rt/epmap/perceptual_map",
+            [&](visualization_msgs::msg::MarkerArray&& m) {
+              std::lock_guard lock(markers_mutex);
+              if (m.markers().size() > 1 &&
+                  dds::ToNanoseconds(m.markers()[1].header().stamp()) == pmap.stamp_ns()) {
+                markers = std::move(m);
+              }
+            },
+            16u << 20, 1, dds::Durability::kTransientLocal);
+    const auto markers_deadline = std::chrono::steady_clock::now() + std::chrono::seconds(15);
+    while (std::chrono::steady_clock::now() < markers_deadline) {
+      {
+        std::lock_guard lock(markers_mutex);
+        if (markers) break;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    std::lock_guard markers_lock(markers_mutex);
+    ASSERT_TRUE(markers.has_value()) << "no perceptual map with the served stamp";
+    EXPECT_EQ(markers->markers()[0].action(), 3) << "DELETEALL first";
+    const auto find = [&](const std::string& ns) -> const visualization_msgs::msg::Marker* {
+      for (const auto& m : markers->markers()) {
+        if (m.ns() == ns) return &m;
+      }
+      return nullptr;
+    };
+    const auto* lines = find("segments");
+    ASSERT_NE(lines, nullptr);
+    EXPECT_EQ(lines->type(), 5);  // LINE_LIST
+    EXPECT_EQ(lines->header().frame_id(), "map");
+    ASSERT_EQ(lines->points().size(), 2u * static_cast<size_t>(pmap.segments_size()));
+    double worst = 0;
+    for (int i = 0; i < pmap.segments_size(); ++i) {
+      const auto& s = pmap.segments(i);
+      const auto& a = lines->points()[2 * static_cast<size_t>(i)];
+      const auto& b = lines->points()[2 * static_cast<size_t>(i) + 1];
+      worst = std::max({worst, std::abs(a.x() - s.x1()), std::abs(a.y() - s.y1()),
+                        std::abs(b.x() - s.x2()), std::abs(b.y() - s.y2())});
+    }
+    EXPECT_LT(worst, 1e-9);
+    const auto* path = find("path");
+    ASSERT_NE(path, nullptr);
+    EXPECT_EQ(path->points().size(), static_cast<size_t>(pmap.path_size()));
+    std::printf("%s: %zu markers, %d segments, %zu path points, as GetPerceptualMap\n",
+                "rt/epmap/perceptual_map", markers->markers().size(), pmap.segments_size(),
+                path->points().size());
 
     grpc::ClientContext pose_context;
     v1::PoseEstimate pose;

@@ -83,10 +83,12 @@ TEST(ServiceConfig, RosOutputTopicsAndFramesAreReadAndChecked) {
   ServiceConfig c;
   mapping::ApplyYaml(
       "dds:\n  topics:\n    map: \"rt/robot1/map\"\n    tf: \"\"\n"
+      "    perceptual_map: \"rt/robot1/pmap\"\n"
       "maps:\n  map_frame: \"robot1_map\"\n  grid_publish_period_s: 2.5\n",
       c);
   EXPECT_EQ(c.topics.map, "rt/robot1/map");
   EXPECT_TRUE(c.topics.tf.empty());  // empty: tf not published
+  EXPECT_EQ(c.topics.perceptual_map, "rt/robot1/pmap");
   EXPECT_EQ(c.maps.map_frame, "robot1_map");
   EXPECT_EQ(c.maps.odom_frame, "odom");
   EXPECT_DOUBLE_EQ(c.maps.grid_publish_period_s, 2.5);
