@@ -7,8 +7,8 @@
 #include <CLI/CLI.hpp>
 #include <functional>
 #include <memory>
-#include <string>
 #include <opencv2/core.hpp>
+#include <string>
 #include <vector>
 
 namespace epmap::ctl {
@@ -19,10 +19,23 @@ struct ClientOptions {
   int exit_code = 0;
 
   std::shared_ptr<grpc::Channel> Channel() const;
-  // A context with the deadline applied.
-  std::unique_ptr<grpc::ClientContext> Context() const;
+  // A context with the deadline applied (plus what the server is asked to wait, in ms).
+  std::unique_ptr<grpc::ClientContext> Context(uint32_t server_wait_ms = 0) const;
   // Prints "epmapctl: <CODE>: <message>" and returns 1 for a failed call.
   int Fail(const grpc::Status& status) const;
+};
+
+// --newer-than / --wait-ms of the maps commands (pmap, grid, pose): wait for the maps after
+// the ones a script already has (they change at key frames).
+struct MapsWait {
+  int64_t newer_than_ns = 0;
+  uint32_t wait_ms = 0;
+  void AddOptions(CLI::App* command);
+  template <typename Request>
+  void Apply(Request* request) const {
+    request->set_newer_than_ns(newer_than_ns);
+    request->set_wait_ms(wait_ms);
+  }
 };
 
 // Subcommands register a setup function that adds themselves to the app.

@@ -21,6 +21,7 @@ struct Args {
   std::string out;
   std::optional<uint32_t> layer;
   std::optional<double> max_height_m;
+  epmap::ctl::MapsWait wait;
 };
 
 // What the grid holds, for the summary line: "layer 1 (0.70-1.30 m)", "all layers combined" or
@@ -73,8 +74,9 @@ int Run(const ClientOptions& options, const Args& args) {
   epmap::v1::GetOccupancyGridRequest request;
   if (args.layer) request.set_layer(*args.layer);
   if (args.max_height_m) request.set_max_height_m(*args.max_height_m);
+  args.wait.Apply(&request);
   epmap::v1::OccupancyGrid grid;
-  const auto context = options.Context();
+  const auto context = options.Context(args.wait.wait_ms);
   const grpc::Status rpc = stub->GetOccupancyGrid(context.get(), request, &grid);
   if (!rpc.ok()) return options.Fail(rpc);
   const auto e = FromProto(grid);
@@ -114,6 +116,7 @@ void Setup(CLI::App& app, ClientOptions& options) {
   cmd->add_option("--max-height", args->max_height_m,
                   "the bands a robot this tall (m) can hit, combined (those starting below it)")
       ->excludes(layer);
+  args->wait.AddOptions(cmd);
   cmd->callback([&options, args] { options.exit_code = Run(options, *args); });
 }
 

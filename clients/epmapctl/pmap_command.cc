@@ -96,7 +96,8 @@ std::string Svg(const epmap::v1::PerceptualMap& m) {
   return s.str();
 }
 
-int Run(const ClientOptions& options, const std::string& out_path) {
+int Run(const ClientOptions& options, const std::string& out_path,
+        const epmap::ctl::MapsWait& wait) {
   const std::string ext = std::filesystem::path(out_path).extension().string();
   if (ext != ".svg" && ext != ".json") {
     std::cerr << "epmapctl: --out must end in .svg (picture) or .json (segments, path, boundary)\n";
@@ -104,8 +105,10 @@ int Run(const ClientOptions& options, const std::string& out_path) {
   }
   auto stub = epmap::v1::MapService::NewStub(options.Channel());
   epmap::v1::PerceptualMap map;
-  const auto context = options.Context();
-  const grpc::Status rpc = stub->GetPerceptualMap(context.get(), {}, &map);
+  epmap::v1::GetPerceptualMapRequest request;
+  wait.Apply(&request);
+  const auto context = options.Context(wait.wait_ms);
+  const grpc::Status rpc = stub->GetPerceptualMap(context.get(), request, &map);
   if (!rpc.ok()) return options.Fail(rpc);
   std::ofstream out(out_path, std::ios::binary);
   out << (ext == ".json" ? Json(map) : Svg(map));
@@ -125,7 +128,9 @@ void Setup(CLI::App& app, ClientOptions& options) {
   auto out = std::make_shared<std::string>();
   cmd->add_option("--out", *out, "FILE.svg (picture) or FILE.json (metres, world frame)")
       ->required();
-  cmd->callback([&options, out] { options.exit_code = Run(options, *out); });
+  auto wait = std::make_shared<epmap::ctl::MapsWait>();
+  wait->AddOptions(cmd);
+  cmd->callback([&options, out, wait] { options.exit_code = Run(options, *out, *wait); });
 }
 
 }  // namespace

@@ -19,11 +19,13 @@ std::string Pose(const epmap::v1::Pose2D& p) {
   return buf;
 }
 
-int Run(const ClientOptions& options, bool json) {
+int Run(const ClientOptions& options, bool json, const epmap::ctl::MapsWait& wait) {
   auto stub = epmap::v1::MapService::NewStub(options.Channel());
   epmap::v1::PoseEstimate pose;
-  const auto context = options.Context();
-  const grpc::Status rpc = stub->GetPose(context.get(), {}, &pose);
+  epmap::v1::GetPoseRequest request;
+  wait.Apply(&request);
+  const auto context = options.Context(wait.wait_ms);
+  const grpc::Status rpc = stub->GetPose(context.get(), request, &pose);
   if (!rpc.ok()) return options.Fail(rpc);
   if (json) {
     std::printf(
@@ -51,7 +53,9 @@ void Setup(CLI::App& app, ClientOptions& options) {
   auto* cmd = app.add_subcommand("pose", "odometry, corrected pose and difference (mobile base)");
   auto json = std::make_shared<bool>(false);
   cmd->add_flag("--json", *json, "one JSON object instead of text");
-  cmd->callback([&options, json] { options.exit_code = Run(options, *json); });
+  auto wait = std::make_shared<epmap::ctl::MapsWait>();
+  wait->AddOptions(cmd);
+  cmd->callback([&options, json, wait] { options.exit_code = Run(options, *json, *wait); });
 }
 
 }  // namespace

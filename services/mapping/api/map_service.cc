@@ -73,28 +73,40 @@ grpc::Status MapServiceImpl::GetStatus(grpc::ServerContext*, const v1::GetStatus
   return grpc::Status::OK;
 }
 
-grpc::Status MapServiceImpl::GetDisparity(grpc::ServerContext* context,
-                                          const v1::GetDisparityRequest* request,
-                                          v1::DisparityMap* out) {
-  if (request->wait_ms() > kMaxWaitMs) {
+grpc::Status MapServiceImpl::CheckWait(int64_t newer_than_ns, uint32_t wait_ms) {
+  if (wait_ms > kMaxWaitMs) {
     return {grpc::StatusCode::INVALID_ARGUMENT, "wait_ms must be at most " +
                                                     std::to_string(kMaxWaitMs) + ", got " +
-                                                    std::to_string(request->wait_ms())};
+                                                    std::to_string(wait_ms)};
   }
-  if (request->newer_than_ns() < 0) {
+  if (newer_than_ns < 0) {
     return {grpc::StatusCode::INVALID_ARGUMENT, "newer_than_ns must not be negative"};
   }
-  const auto deadline =
-      std::chrono::steady_clock::now() + std::chrono::milliseconds(request->wait_ms());
+  return grpc::Status::OK;
+}
+
+std::shared_ptr<const MapSnapshot> MapServiceImpl::WaitForSnapshot(
+    grpc::ServerContext* context, uint32_t wait_ms,
+    const std::function<bool(const MapSnapshot&)>& ready) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(wait_ms);
   auto snapshot = service_.snapshots().Latest();
-  while ((!snapshot || snapshot->stamp_ns <= request->newer_than_ns()) &&
-         std::chrono::steady_clock::now() < deadline && !context->IsCancelled() &&
-         !service_.shutting_down()) {
+  while ((!snapshot || !ready(*snapshot)) && std::chrono::steady_clock::now() < deadline &&
+         !context->IsCancelled() && !service_.shutting_down()) {
     const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
         deadline - std::chrono::steady_clock::now());
     snapshot = service_.snapshots().WaitNewer(snapshot ? snapshot->frame_index : 0,
                                               std::min(left, std::chrono::milliseconds(200)));
   }
+  return snapshot;
+}
+
+grpc::Status MapServiceImpl::GetDisparity(grpc::ServerContext* context,
+                                          const v1::GetDisparityRequest* request,
+                                          v1::DisparityMap* out) {
+  if (auto bad = CheckWait(request->newer_than_ns(), request->wait_ms()); !bad.ok()) return bad;
+  const auto snapshot = WaitForSnapshot(context, request->wait_ms(), [&](const MapSnapshot& s) {
+    return s.stamp_ns > request->newer_than_ns();
+  });
   if (!snapshot) {
     return {grpc::StatusCode::UNAVAILABLE,
             "no frame has been processed yet (is a stereo source publishing on domain " +

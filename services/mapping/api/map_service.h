@@ -4,9 +4,17 @@
 
 #include <epmap/v1/map_service.grpc.pb.h>
 
+#include <functional>
+#include <memory>
+
+namespace epmap::mobile_mapping {
+struct MapsSnapshot;
+}
+
 namespace epmap::mapping {
 
 class MappingService;
+struct MapSnapshot;
 
 class MapServiceImpl final : public v1::MapService::Service {
  public:
@@ -37,6 +45,20 @@ class MapServiceImpl final : public v1::MapService::Service {
                        v1::PoseEstimate* response) override;
 
  private:
+  // newer_than_ns / wait_ms as the requests that take them: INVALID_ARGUMENT for a negative stamp
+  // or a wait beyond 30 s.
+  static grpc::Status CheckWait(int64_t newer_than_ns, uint32_t wait_ms);
+  // The newest snapshot, after waiting up to wait_ms (the call's cancellation and shutdown end
+  // the wait early) for one that `ready` accepts; may be null or not ready when the wait ends.
+  std::shared_ptr<const MapSnapshot> WaitForSnapshot(
+      grpc::ServerContext* context, uint32_t wait_ms,
+      const std::function<bool(const MapSnapshot&)>& ready);
+  // The maps of the newest snapshot (waiting as above for maps stamped after newer_than_ns), or
+  // why there are none: FAILED_PRECONDITION (not a mobile base, maps off, no key frame yet),
+  // DEADLINE_EXCEEDED (maps, but none newer within wait_ms).
+  grpc::Status LatestMaps(grpc::ServerContext* context, int64_t newer_than_ns, uint32_t wait_ms,
+                          std::shared_ptr<const mobile_mapping::MapsSnapshot>* maps);
+
   MappingService& service_;
 };
 

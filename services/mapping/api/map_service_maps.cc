@@ -2,7 +2,8 @@
 // from the newest snapshot's maps (services/mapping/pipeline/pipeline_maps.cc). Errors:
 // FAILED_PRECONDITION when the service is not in mobile-base mode or no key frame has made a
 // map yet, INVALID_ARGUMENT for a layer the grid does not have, a max_height_m below its lowest
-// band, or both at once.
+// band, or both at once, DEADLINE_EXCEEDED when no maps newer than newer_than_ns came within
+// wait_ms.
 
 #include <algorithm>
 #include <cmath>
@@ -28,36 +29,55 @@ void ToProto(const Eigen::Vector2d& p, v1::Point2D* out) {
   out->set_y(p.y());
 }
 
-// The maps of the newest snapshot, or why there are none.
-grpc::Status LatestMaps(MappingService& service,
-                        std::shared_ptr<const mobile_mapping::MapsSnapshot>* maps) {
-  const std::string mode = service.pipeline().mode();
-  if (mode != "mobile-base") {
-    return {grpc::StatusCode::FAILED_PRECONDITION,
-            "the maps are built in mobile-base mode only; the service is in '" + mode +
-                "' mode (mobile-base needs odometry on " + service.config().topics.odom +
-                " or robot.mode: mobile-base)"};
+}  // namespace
+
+grpc::Status MapServiceImpl::LatestMaps(grpc::ServerContext* context, int64_t newer_than_ns,
+                                        uint32_t wait_ms,
+                                        std::shared_ptr<const mobile_mapping::MapsSnapshot>* maps) {
+  if (auto bad = CheckWait(newer_than_ns, wait_ms); !bad.ok()) return bad;
+  const auto not_mobile = [&](const std::string& mode) {
+    return grpc::Status{grpc::StatusCode::FAILED_PRECONDITION,
+                        "the maps are built in mobile-base mode only; the service is in '" + mode +
+                            "' mode (mobile-base needs odometry on " +
+                            service_.config().topics.odom + " or robot.mode: mobile-base)"};
+  };
+  // An `auto` service becomes a mobile base when odometry arrives: worth waiting for.
+  const std::string mode = service_.pipeline().mode();
+  if (mode != "mobile-base" && (wait_ms == 0 || service_.config().mode != "auto")) {
+    return not_mobile(mode);
   }
-  if (!service.config().maps.enabled) {
+  if (!service_.config().maps.enabled) {
     return {grpc::StatusCode::FAILED_PRECONDITION, "the maps are disabled (maps.enabled: false)"};
   }
-  const auto snapshot = service.snapshots().Latest();
+  // A planner that has the maps of newer_than_ns waits for the next key frame's; maps change
+  // only at key frames, so most snapshots in between carry the same ones.
+  const auto snapshot = WaitForSnapshot(context, wait_ms, [&](const MapSnapshot& s) {
+    return s.maps && s.maps->stamp_ns > newer_than_ns;
+  });
   if (!snapshot || !snapshot->maps) {
+    if (const std::string now = service_.pipeline().mode(); now != "mobile-base") {
+      return not_mobile(now);
+    }
     return {grpc::StatusCode::FAILED_PRECONDITION,
             "no map yet: no key frame has been accepted (see GetStatus "
             "key_frames_refused_by_reason for refused ones)"};
+  }
+  if (snapshot->maps->stamp_ns <= newer_than_ns) {
+    return {grpc::StatusCode::DEADLINE_EXCEEDED,
+            "no maps newer than the requested stamp within wait_ms (they change at key frames: "
+            "when the base moves or the head pans)"};
   }
   *maps = snapshot->maps;
   return grpc::Status::OK;
 }
 
-}  // namespace
-
-grpc::Status MapServiceImpl::GetPerceptualMap(grpc::ServerContext*,
-                                              const v1::GetPerceptualMapRequest*,
+grpc::Status MapServiceImpl::GetPerceptualMap(grpc::ServerContext* context,
+                                              const v1::GetPerceptualMapRequest* request,
                                               v1::PerceptualMap* out) {
   std::shared_ptr<const mobile_mapping::MapsSnapshot> maps;
-  if (auto status = LatestMaps(service_, &maps); !status.ok()) return status;
+  if (auto status = LatestMaps(context, request->newer_than_ns(), request->wait_ms(), &maps);
+      !status.ok())
+    return status;
   const auto& m = maps->perceptual;
   out->set_stamp_ns(maps->stamp_ns);
   out->set_includes_open_stop(maps->includes_open_stop);
@@ -87,11 +107,13 @@ grpc::Status MapServiceImpl::GetPerceptualMap(grpc::ServerContext*,
   return grpc::Status::OK;
 }
 
-grpc::Status MapServiceImpl::GetOccupancyGrid(grpc::ServerContext*,
+grpc::Status MapServiceImpl::GetOccupancyGrid(grpc::ServerContext* context,
                                               const v1::GetOccupancyGridRequest* request,
                                               v1::OccupancyGrid* out) {
   std::shared_ptr<const mobile_mapping::MapsSnapshot> maps;
-  if (auto status = LatestMaps(service_, &maps); !status.ok()) return status;
+  if (auto status = LatestMaps(context, request->newer_than_ns(), request->wait_ms(), &maps);
+      !status.ok())
+    return status;
   const int layers = maps->grid.layer_count();
   std::optional<int> layer;
   int first_layers = layers;  // the combined map's bands, from the floor up
@@ -147,10 +169,12 @@ grpc::Status MapServiceImpl::GetOccupancyGrid(grpc::ServerContext*,
   return grpc::Status::OK;
 }
 
-grpc::Status MapServiceImpl::GetPose(grpc::ServerContext*, const v1::GetPoseRequest*,
-                                     v1::PoseEstimate* out) {
+grpc::Status MapServiceImpl::GetPose(grpc::ServerContext* context,
+                                     const v1::GetPoseRequest* request, v1::PoseEstimate* out) {
   std::shared_ptr<const mobile_mapping::MapsSnapshot> maps;
-  if (auto status = LatestMaps(service_, &maps); !status.ok()) return status;
+  if (auto status = LatestMaps(context, request->newer_than_ns(), request->wait_ms(), &maps);
+      !status.ok())
+    return status;
   if (maps->poses.empty()) {
     return {grpc::StatusCode::FAILED_PRECONDITION, "no pose yet: no key frame accepted"};
   }

@@ -17,6 +17,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <future>
 #include <limits>
 #include <memory>
 #include <mutex>
@@ -650,6 +651,77 @@ TEST_F(MapsFromPublishedFrames, AStopUnderWayIsServedBeforeTheBaseMovesOn) {
   EXPECT_FALSE(after.includes_open_stop());
   EXPECT_EQ(after.views_size(), during.views_size());
   EXPECT_EQ(after.segments_size(), during.segments_size());
+}
+
+// A planner that has the maps waits for the next ones instead of polling: the call returns when
+// a key frame brings newer maps, DEADLINE_EXCEEDED when none comes in time.
+TEST_F(MapsFromPublishedFrames, APlannerWaitsForTheNextKeyFramesMaps) {
+  ASSERT_NO_FATAL_FAILURE(Start("maps-wait", 64));
+  auto& epmapd = *epmapd_;
+  auto& pub = *pub_;
+  const auto stamp = &Stamp;
+  for (int i = 0; i < 3; ++i) pub.Frame(stamp(i), 0.3 * i, 0.0, false);  // a key frame each
+  epmapd.WaitStatus(
+      [&](const v1::ServiceStatus& s) {
+        return testing::Epmapd::Count(s.events(), "maps_key_frames") >= 3;
+      },
+      std::chrono::seconds(30));
+  const auto get_pose = [&](int64_t newer_than_ns, uint32_t wait_ms, v1::PoseEstimate* pose) {
+    grpc::ClientContext context;
+    v1::GetPoseRequest request;
+    request.set_newer_than_ns(newer_than_ns);
+    request.set_wait_ms(wait_ms);
+    return epmapd.stub().GetPose(&context, request, pose);
+  };
+  v1::PoseEstimate have;
+  ASSERT_TRUE(get_pose(0, 0, &have).ok());
+  EXPECT_EQ(have.stamp_ns(), stamp(2));
+
+  // Bad waits.
+  v1::PoseEstimate unused;
+  EXPECT_EQ(get_pose(-1, 0, &unused).error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(get_pose(0, 40000, &unused).error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  // Nothing new comes: DEADLINE_EXCEEDED after the wait, for the grid and the perceptual map too.
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto none = get_pose(have.stamp_ns(), 300, &unused);
+  const double waited_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  EXPECT_EQ(none.error_code(), grpc::StatusCode::DEADLINE_EXCEEDED) << none.error_message();
+  EXPECT_GE(waited_s, 0.25);
+  {
+    grpc::ClientContext context;
+    v1::GetPerceptualMapRequest request;
+    request.set_newer_than_ns(have.stamp_ns());
+    v1::PerceptualMap map;
+    EXPECT_EQ(epmapd.stub().GetPerceptualMap(&context, request, &map).error_code(),
+              grpc::StatusCode::DEADLINE_EXCEEDED);
+  }
+  const auto [ctl_code, ctl_out] =
+      testing::RunToCompletion(testing::BinDir() / "epmapctl",
+                               {"--server", epmapd.address(), "pose", "--json", "--newer-than",
+                                std::to_string(have.stamp_ns()), "--wait-ms", "200"},
+                               work_ / "ctl-wait.log", std::chrono::seconds(30));
+  EXPECT_NE(ctl_code, 0);
+  EXPECT_NE(ctl_out.find("DEADLINE_EXCEEDED"), std::string::npos) << ctl_out;
+
+  // Waiting while the robot moves on: the call returns with the next key frame's maps.
+  auto next = std::async(std::launch::async, [&] {
+    v1::PoseEstimate pose;
+    const auto start = std::chrono::steady_clock::now();
+    const auto status = get_pose(have.stamp_ns(), 20000, &pose);
+    return std::make_tuple(
+        status, pose,
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  });
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  pub.Frame(stamp(3), 0.9, 0.0, false);
+  const auto [status, pose, took_s] = next.get();
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  EXPECT_EQ(pose.stamp_ns(), stamp(3));
+  EXPECT_EQ(pose.keyframes(), have.keyframes() + 1);
+  EXPECT_GE(took_s, 0.4) << "it returned before the key frame was published";
+  std::printf("waited %.2f s for the next key frame's maps (stamp %lld)\n", took_s,
+              static_cast<long long>(pose.stamp_ns()));
 }
 
 }  // namespace
