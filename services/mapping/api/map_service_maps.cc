@@ -110,6 +110,11 @@ grpc::Status MapServiceImpl::GetPerceptualMap(grpc::ServerContext* context,
 grpc::Status MapServiceImpl::GetOccupancyGrid(grpc::ServerContext* context,
                                               const v1::GetOccupancyGridRequest* request,
                                               v1::OccupancyGrid* out) {
+  if (request->has_layer() && request->has_max_height_m()) {
+    return {grpc::StatusCode::INVALID_ARGUMENT,
+            "give a layer or max_height_m, not both (a layer is one band; max_height_m combines "
+            "the bands a robot that tall can hit)"};
+  }
   std::shared_ptr<const mobile_mapping::MapsSnapshot> maps;
   if (auto status = LatestMaps(context, request->newer_than_ns(), request->wait_ms(), &maps);
       !status.ok())
@@ -117,11 +122,6 @@ grpc::Status MapServiceImpl::GetOccupancyGrid(grpc::ServerContext* context,
   const int layers = maps->grid.layer_count();
   std::optional<int> layer;
   int first_layers = layers;  // the combined map's bands, from the floor up
-  if (request->has_layer() && request->has_max_height_m()) {
-    return {grpc::StatusCode::INVALID_ARGUMENT,
-            "give a layer or max_height_m, not both (a layer is one band; max_height_m combines "
-            "the bands a robot that tall can hit)"};
-  }
   if (request->has_layer()) {
     if (request->layer() >= static_cast<uint32_t>(layers)) {
       return {grpc::StatusCode::INVALID_ARGUMENT,
