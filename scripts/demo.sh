@@ -130,6 +130,7 @@ snapshot
 echo
 echo "== summary (full status in $OUT/status.txt)"
 sed -n '1,6p' "$OUT/status.txt"
+grep -m1 '^memory:' "$OUT/status.txt" || true
 echo
 echo "expected perception (paper 000): $(sed 's/^wrote [^ ]* //' "$OUT/expectation.txt" 2>/dev/null)"
 echo "unexpected now: $(sed -n 2p "$OUT/unexpected.txt" 2>/dev/null)"

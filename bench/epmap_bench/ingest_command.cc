@@ -28,6 +28,7 @@
 #include "common/dds/endpoints.h"
 #include "common/dds/ros_conversions.h"
 #include "common/process/child_process.h"
+#include "common/process/process_memory.h"
 
 namespace {
 
@@ -38,16 +39,6 @@ int64_t WallNs() {
   return std::chrono::duration_cast<std::chrono::nanoseconds>(
              std::chrono::system_clock::now().time_since_epoch())
       .count();
-}
-
-// Peak resident memory of a process (VmHWM), in MB.
-double PeakRssMb(pid_t pid) {
-  std::ifstream in("/proc/" + std::to_string(pid) + "/status");
-  std::string line;
-  while (std::getline(in, line)) {
-    if (line.rfind("VmHWM:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;
-  }
-  return -1.0;
 }
 
 uint64_t Count(const google::protobuf::RepeatedPtrField<epmap::v1::Counter>& counters,
@@ -136,7 +127,8 @@ int Run(int argc, char** argv) {
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(500));
     status(&s);
-    const double peak_mb = PeakRssMb(epmapd.pid());
+    const double peak_mb =
+        epmap::process::ReadProcessMemory(std::to_string(epmapd.pid())).peak_resident_mb;
     epmapd.Signal(SIGTERM);
     const auto code = epmapd.Wait(std::chrono::seconds(10));
 

@@ -44,6 +44,9 @@ void PrintHuman(const epmap::v1::ServiceStatus& s) {
               static_cast<unsigned long long>(s.full_refreshes()));
   if (s.unexpected_watchers())
     std::printf("watch-unexpected streams: %u\n", s.unexpected_watchers());
+  if (s.resident_mb() > 0) {
+    std::printf("memory: resident %.1f MB, peak %.1f MB\n", s.resident_mb(), s.peak_resident_mb());
+  }
   PrintCounters("rejected", s.rejected_by_reason());
   PrintCounters("key frames the maps refused (their frames were processed)",
                 s.key_frames_refused_by_reason());

@@ -1,5 +1,6 @@
 #include "services/mapping/api/map_service.h"
 
+#include "common/process/process_memory.h"
 #include "services/mapping/api/proto_conversions.h"
 #include "services/mapping/service.h"
 
@@ -70,6 +71,9 @@ grpc::Status MapServiceImpl::GetStatus(grpc::ServerContext*, const v1::GetStatus
   out->set_active_eye_hand_model(models.eye_hand_id());
   out->set_active_stereo_model(models.stereo_id());
   out->set_unexpected_watchers(static_cast<uint32_t>(pipeline.unexpected_hub().subscribers()));
+  const auto memory = process::ReadProcessMemory();
+  out->set_resident_mb(memory.resident_mb);
+  out->set_peak_resident_mb(memory.peak_resident_mb);
   return grpc::Status::OK;
 }
 

@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdio>
+
 #include "tests/support/epmapd_fixture.h"
 
 namespace epmap {
@@ -32,6 +34,11 @@ TEST(EurocReplayE2E, AllFortyFramesProcessedAtTwentyHertz) {
   EXPECT_EQ(status.frames_rejected(), 0u) << status.DebugString();
   EXPECT_EQ(status.transport_lost_by_topic_size(), 0) << status.DebugString();
   EXPECT_EQ(status.last_stamp_ns(), 1403715275212143104LL);
+  // Its memory, as an operator sees it: resident now, and a peak at least that.
+  EXPECT_GT(status.resident_mb(), 10.0) << status.DebugString();
+  EXPECT_GE(status.peak_resident_mb(), status.resident_mb()) << status.DebugString();
+  std::printf("epmapd after 40 EuRoC frames: resident %.1f MB, peak %.1f MB\n",
+              status.resident_mb(), status.peak_resident_mb());
 
   // The served map is the rectified geometry of the VI-sensor (11 cm baseline).
   v1::DisparityMap map;
