@@ -99,7 +99,7 @@ void RosMapPublisher::Run() {
   const auto period = std::chrono::duration_cast<Clock::duration>(
       std::chrono::duration<double>(config_.maps.grid_publish_period_s));
   uint64_t seen_frame = 0;
-  std::shared_ptr<const mobile_mapping::MapsSnapshot> published, grid_pending;
+  std::shared_ptr<const mobile_mapping::MapsSnapshot> published, maps_pending;
   Clock::time_point last_grid{};
   while (!stop_) {
     const auto snapshot = snapshots_.WaitNewer(seen_frame, std::chrono::milliseconds(200));
@@ -114,7 +114,7 @@ void RosMapPublisher::Run() {
         if (!writers_->created()) CreateWriters();
         if (snapshot->maps != published) {
           published = snapshot->maps;
-          grid_pending = snapshot->maps;
+          maps_pending = snapshot->maps;
         }
         // Every frame, at its own time (the correction holds until the next key frame).
         PublishTransform(*snapshot->maps, std::max(snapshot->stamp_ns, snapshot->maps->stamp_ns));
@@ -122,10 +122,10 @@ void RosMapPublisher::Run() {
     }
     // The grid (and the perceptual map beside it) at most once a period, the newest one; a
     // change that arrives within the period goes out when it ends.
-    if (grid_pending && Clock::now() - last_grid >= period) {
-      PublishGrid(*grid_pending);
-      PublishMarkers(*grid_pending);
-      grid_pending.reset();
+    if (maps_pending && Clock::now() - last_grid >= period) {
+      PublishGrid(*maps_pending);
+      PublishMarkers(*maps_pending);
+      maps_pending.reset();
       last_grid = Clock::now();
     }
   }
