@@ -6,6 +6,7 @@
 #include <epmap_dds/OccupancyGrid.h>
 #include <epmap_dds/OccupancyGridPubSubTypes.h>
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <atomic>
 #include <chrono>
@@ -59,9 +60,9 @@ TEST(RosMapPublisher, MapToOdomCarriesTheOdometryPoseOntoTheCorrectedOne) {
 // A reader on rt/map, transient local as RViz's map display: how many writers it matched and
 // how many grids it got.
 struct MapListener {
-  explicit MapListener(dds::Participant& participant)
+  MapListener(dds::Participant& participant, const std::string& topic)
       : reader(
-            participant, dds::RosTopic("map"), [this](nav_msgs::msg::OccupancyGrid&&) { ++grids; },
+            participant, dds::RosTopic(topic), [this](nav_msgs::msg::OccupancyGrid&&) { ++grids; },
             1u << 20, 1, dds::Durability::kTransientLocal) {}
   std::atomic<int> grids{0};
   dds::Reader<nav_msgs::msg::OccupancyGrid, nav_msgs::msg::OccupancyGridPubSubType> reader;
@@ -92,11 +93,14 @@ std::shared_ptr<const MapSnapshot> FrameWithMaps(uint64_t frame_index) {
 // its first maps, and a reader that was already waiting then gets the grid.
 TEST(RosMapPublisher, TheWritersAppearWithTheFirstMapsOnly) {
   dds::Participant participant(testing::UniqueDomainId(31), "ros_map_publisher_test");
-  MapListener listener(participant);
+  // Topics of this process's own: a test elsewhere on a colliding domain id cannot match them.
+  const std::string suffix = std::to_string(::getpid());
   CounterSet events;
   ServiceConfig config;
-  config.topics.map = "map";
-  config.topics.tf = "tf";
+  config.topics.map = "map_" + suffix;
+  config.topics.tf = "tf_" + suffix;
+  config.topics.perceptual_map = "pmap_" + suffix;
+  MapListener listener(participant, config.topics.map);
   {
     config.mode = "head";
     SnapshotStore snapshots;
