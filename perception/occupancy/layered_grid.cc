@@ -271,6 +271,10 @@ Cell LayeredGrid::At(int layer, int64_t ix, int64_t iy) const {
 
 Cell LayeredGrid::Combined(int64_t ix, int64_t iy, int first_layers) const {
   CheckFirstLayers(first_layers);
+  return CombineLowest(ix, iy, first_layers);
+}
+
+Cell LayeredGrid::CombineLowest(int64_t ix, int64_t iy, int first_layers) const {
   Cell out;
   float max_empty = 0;
   for (int l = 0; l < first_layers; ++l) {
@@ -377,8 +381,8 @@ GridExport LayeredGrid::Export(std::optional<int> layer, double unknown_below) c
 
 GridExport LayeredGrid::ExportBelow(int first_layers, double unknown_below) const {
   CheckFirstLayers(first_layers);
-  GridExport e = ExportCells([&](int64_t ix, int64_t iy) { return Combined(ix, iy, first_layers); },
-                             unknown_below);
+  GridExport e = ExportCells(
+      [&](int64_t ix, int64_t iy) { return CombineLowest(ix, iy, first_layers); }, unknown_below);
   e.combined = true;
   e.combined_layers = static_cast<uint32_t>(first_layers);
   return e;

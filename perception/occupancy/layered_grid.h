@@ -169,6 +169,7 @@ class LayeredGrid {
   void EnsureCovers(int64_t ix_lo, int64_t iy_lo, int64_t ix_hi, int64_t iy_hi);
   void CheckLayer(int layer) const;
   void CheckFirstLayers(int first_layers) const;
+  Cell CombineLowest(int64_t ix, int64_t iy, int first_layers) const;  // Combined, unchecked
   // The export of whatever cell(ix, iy) gives, cropped to its known cells plus one.
   template <typename CellAt>
   GridExport ExportCells(const CellAt& cell_at, double unknown_below) const;

@@ -76,8 +76,9 @@ grpc::Status MapServiceImpl::GetPerceptualMap(grpc::ServerContext* context,
                                               v1::PerceptualMap* out) {
   std::shared_ptr<const mobile_mapping::MapsSnapshot> maps;
   if (auto status = LatestMaps(context, request->newer_than_ns(), request->wait_ms(), &maps);
-      !status.ok())
+      !status.ok()) {
     return status;
+  }
   const auto& m = maps->perceptual;
   out->set_stamp_ns(maps->stamp_ns);
   out->set_includes_open_stop(maps->includes_open_stop);
@@ -117,8 +118,9 @@ grpc::Status MapServiceImpl::GetOccupancyGrid(grpc::ServerContext* context,
   }
   std::shared_ptr<const mobile_mapping::MapsSnapshot> maps;
   if (auto status = LatestMaps(context, request->newer_than_ns(), request->wait_ms(), &maps);
-      !status.ok())
+      !status.ok()) {
     return status;
+  }
   const int layers = maps->grid.layer_count();
   std::optional<int> layer;
   int first_layers = layers;  // the combined map's bands, from the floor up
@@ -173,8 +175,9 @@ grpc::Status MapServiceImpl::GetPose(grpc::ServerContext* context,
                                      const v1::GetPoseRequest* request, v1::PoseEstimate* out) {
   std::shared_ptr<const mobile_mapping::MapsSnapshot> maps;
   if (auto status = LatestMaps(context, request->newer_than_ns(), request->wait_ms(), &maps);
-      !status.ok())
+      !status.ok()) {
     return status;
+  }
   if (maps->poses.empty()) {
     return {grpc::StatusCode::FAILED_PRECONDITION, "no pose yet: no key frame accepted"};
   }
