@@ -140,6 +140,7 @@ ReplayReport Replay(const dataset::Dataset& d, const ReplayOptions& options) {
         break;
       }
       std::this_thread::sleep_until(t0 + std::chrono::nanoseconds(offset_ns));
+      report.last_scheduled_s = offset_ns * 1e-9;
       // Restamped messages carry the wall-clock time they were meant to be sent at.
       const int64_t stamp = restamp ? wall0 + offset_ns : e.stamp_ns;
       switch (e.kind) {

@@ -29,7 +29,9 @@ struct ReplayReport {
   size_t loops = 0;
   size_t joint_states = 0;
   size_t odometry = 0;
-  double seconds = 0.0;
+  double seconds = 0.0;           // wall clock from the first send to the end of the last
+  double last_scheduled_s = 0.0;  // when the last sent event was due (replay time): what the
+                                  // schedule decided, independent of how loaded the host is
 };
 
 // Blocks until done. Throws std::runtime_error when no reader matches within the wait or an
