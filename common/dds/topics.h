@@ -20,6 +20,11 @@ struct TopicNames {
   std::string map = "rt/map";
   std::string tf = "rt/tf";
   std::string perceptual_map = "rt/epmap/perceptual_map";
+  // What epmapd publishes for every processed frame, in any mode, while a reader listens (no
+  // reader: nothing is converted): the EP disparity map as stereo_msgs/DisparityImage (as
+  // stereo_image_proc's `disparity`) and the unexpected-motion mask as a mono8 image.
+  std::string disparity = "rt/epmap/disparity";
+  std::string unexpected_mask = "rt/epmap/unexpected_mask";
 };
 
 }  // namespace epmap::dds

@@ -30,6 +30,8 @@ MappingService::MappingService(const ServiceConfig& config)
   ingest_->SetEyeHandCallback(calibration_->EyeHandSamplesCallback());
   ros_maps_ = std::make_unique<RosMapPublisher>(config_, ingest_->participant(), snapshots_,
                                                 pipeline_->events());
+  ros_perception_ = std::make_unique<RosPerceptionPublisher>(config_, ingest_->participant(),
+                                                             snapshots_, pipeline_->events());
 
   map_service_ = std::make_unique<MapServiceImpl>(*this);
   grpc::EnableDefaultHealthCheckService(true);
@@ -66,7 +68,8 @@ void MappingService::Shutdown() {
     if (calibration_) calibration_->Shutdown();
     server_->Shutdown(std::chrono::system_clock::now() + std::chrono::seconds(2));
   }
-  ros_maps_.reset();  // before the participant it writes through
+  ros_maps_.reset();  // before the participant they write through
+  ros_perception_.reset();
   ingest_.reset();    // no more DDS callbacks
   queue_.Close();
   if (pipeline_) pipeline_->Stop();

@@ -16,6 +16,7 @@
 #include "services/mapping/pipeline/map_snapshot.h"
 #include "services/mapping/pipeline/pipeline.h"
 #include "services/mapping/ros_output/ros_map_publisher.h"
+#include "services/mapping/ros_output/ros_perception_publisher.h"
 
 namespace epmap::mapping {
 
@@ -56,6 +57,8 @@ class MappingService {
   std::unique_ptr<Pipeline> pipeline_;
   std::unique_ptr<DdsIngest> ingest_;
   std::unique_ptr<RosMapPublisher> ros_maps_;  // rt/map and rt/tf (mobile-base mode)
+  // rt/epmap/disparity and rt/epmap/unexpected_mask (every mode, while a reader listens)
+  std::unique_ptr<RosPerceptionPublisher> ros_perception_;
   std::unique_ptr<MapServiceImpl> map_service_;
   std::unique_ptr<grpc::Server> server_;
   std::string bound_address_;

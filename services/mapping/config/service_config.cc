@@ -90,6 +90,8 @@ void Apply(const YAML::Node& root, ServiceConfig& c) {
     t.Get("map", c.topics.map);
     t.Get("tf", c.topics.tf);
     t.Get("perceptual_map", c.topics.perceptual_map);
+    t.Get("disparity", c.topics.disparity);
+    t.Get("unexpected_mask", c.topics.unexpected_mask);
     t.RejectUnknownKeys();
     s.RejectUnknownKeys();
   }
@@ -332,6 +334,8 @@ std::string ToYaml(const ServiceConfig& c) {
   out << YAML::Key << "map" << YAML::Value << c.topics.map;
   out << YAML::Key << "tf" << YAML::Value << c.topics.tf;
   out << YAML::Key << "perceptual_map" << YAML::Value << c.topics.perceptual_map;
+  out << YAML::Key << "disparity" << YAML::Value << c.topics.disparity;
+  out << YAML::Key << "unexpected_mask" << YAML::Value << c.topics.unexpected_mask;
   out << YAML::EndMap << YAML::EndMap;
   out << YAML::Key << "ingest" << YAML::Value << YAML::BeginMap;
   out << YAML::Key << "pair_tolerance_ms" << YAML::Value << c.pair_tolerance_ns / 1e6;

@@ -112,7 +112,7 @@ void DdsIngest::OnImage(StereoSynchronizer::Side side, sensor_msgs::msg::Image&&
     return;
   }
   const int64_t stamp = dds::ToNanoseconds(msg.header().stamp());
-  auto frame = synchronizer_.Add(side, stamp, std::move(image));
+  auto frame = synchronizer_.Add(side, stamp, std::move(image), msg.header().frame_id());
   if (!frame) return;
   counters_.frames_assembled++;
   if (const size_t dropped = queue_.Push(std::move(*frame)); dropped > 0) {

@@ -14,7 +14,8 @@ StereoSynchronizer::StereoSynchronizer(int64_t tolerance_ns, int64_t timeout_ns,
                                        CounterSet& rejected)
     : tolerance_ns_(tolerance_ns), timeout_ns_(timeout_ns), rejected_(rejected) {}
 
-std::optional<StereoFrame> StereoSynchronizer::Add(Side side, int64_t stamp_ns, cv::Mat image) {
+std::optional<StereoFrame> StereoSynchronizer::Add(Side side, int64_t stamp_ns, cv::Mat image,
+                                                   std::string frame_id) {
   const int me = side == Side::kLeft ? 0 : 1;
   const int other = 1 - me;
   std::lock_guard lock(mutex_);
@@ -42,16 +43,16 @@ std::optional<StereoFrame> StereoSynchronizer::Add(Side side, int64_t stamp_ns, 
       pending_[me].erase(pending_[me].begin());
       rejected_.Increment(std::string(SideName(me)) + ":unpaired");
     }
-    pending_[me].emplace(stamp_ns, std::move(image));
+    pending_[me].emplace(stamp_ns, Pending{std::move(image), std::move(frame_id)});
     return std::nullopt;
   }
-  cv::Mat partner = std::move(best->second);
+  Pending partner = std::move(best->second);
   const int64_t pair_stamp = me == 0 ? stamp_ns : best->first;
   // Older images of the other side can never pair now.
   const size_t orphans = static_cast<size_t>(std::distance(candidates.begin(), best));
   if (orphans) rejected_.Increment(std::string(SideName(other)) + ":unpaired", orphans);
   candidates.erase(candidates.begin(), std::next(best));
-  if (partner.size() != image.size() || partner.type() != image.type()) {
+  if (partner.image.size() != image.size() || partner.image.type() != image.type()) {
     rejected_.Increment("pair:size_mismatch");
     return std::nullopt;
   }
@@ -63,8 +64,9 @@ std::optional<StereoFrame> StereoSynchronizer::Add(Side side, int64_t stamp_ns, 
   StereoFrame frame;
   frame.sequence = ++sequence_;
   frame.stamp_ns = pair_stamp;
-  frame.left = me == 0 ? std::move(image) : std::move(partner);
-  frame.right = me == 0 ? std::move(partner) : std::move(image);
+  frame.left = me == 0 ? std::move(image) : std::move(partner.image);
+  frame.right = me == 0 ? std::move(partner.image) : std::move(image);
+  frame.frame_id = me == 0 ? std::move(frame_id) : std::move(partner.frame_id);
   frame.assembled = std::chrono::steady_clock::now();
   return frame;
 }

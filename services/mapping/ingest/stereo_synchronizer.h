@@ -6,6 +6,7 @@
 #include <map>
 #include <mutex>
 #include <optional>
+#include <string>
 
 #include "services/mapping/ingest/counters.h"
 #include "services/mapping/ingest/stereo_frame.h"
@@ -17,8 +18,10 @@ class StereoSynchronizer {
   StereoSynchronizer(int64_t tolerance_ns, int64_t timeout_ns, CounterSet& rejected);
 
   enum class Side { kLeft, kRight };
-  // Adds one validated image; returns a complete pair when this image finished one.
-  std::optional<StereoFrame> Add(Side side, int64_t stamp_ns, cv::Mat image);
+  // Adds one validated image; returns a complete pair when this image finished one. frame_id:
+  // the image header's (the pair carries the left one's, which its disparity is in).
+  std::optional<StereoFrame> Add(Side side, int64_t stamp_ns, cv::Mat image,
+                                 std::string frame_id = {});
 
  private:
   void ExpireOlderThan(int64_t stamp_ns);
@@ -27,7 +30,11 @@ class StereoSynchronizer {
   const int64_t timeout_ns_;
   CounterSet& rejected_;
   std::mutex mutex_;
-  std::map<int64_t, cv::Mat> pending_[2];
+  struct Pending {
+    cv::Mat image;
+    std::string frame_id;
+  };
+  std::map<int64_t, Pending> pending_[2];
   int64_t last_stamp_[2] = {INT64_MIN, INT64_MIN};
   int64_t last_paired_stamp_ = INT64_MIN;
   uint64_t sequence_ = 0;

@@ -10,6 +10,7 @@
 #include <mutex>
 #include <opencv2/core.hpp>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "perception/ep/expected_perception.h"
@@ -30,6 +31,7 @@ struct FramePose {
 struct MapSnapshot {
   uint64_t frame_index = 0;  // 1 for the first processed frame
   int64_t stamp_ns = 0;
+  std::string frame_id;  // the left image's header.frame_id: the camera the disparity is in
   stereo::RectifiedGeometry camera;
   int min_disparity = 0;
   int num_disparities = 0;

@@ -179,6 +179,7 @@ void Pipeline::Process(StereoFrame& frame) {
   auto snapshot = std::make_shared<MapSnapshot>();
   snapshot->frame_index = processed_.load() + 1;
   snapshot->stamp_ns = frame.stamp_ns;
+  snapshot->frame_id = frame.frame_id;
   snapshot->camera = rectifier->geometry();
   snapshot->min_disparity = config_.sgbm.min_disparity;
   snapshot->num_disparities = config_.sgbm.num_disparities;

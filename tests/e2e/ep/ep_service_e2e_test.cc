@@ -4,14 +4,23 @@
 // commands built on them checked against the ground truth. Then the bad input of issue 4: a
 // URDF without cam0_optical, joints the URDF does not name, pose jumps beyond the bound.
 
+#include <epmap_dds/DisparityImagePubSubTypes.h>
+#include <epmap_dds/ImagePubSubTypes.h>
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstring>
 #include <fstream>
+#include <map>
 #include <mutex>
 #include <opencv2/imgcodecs.hpp>
+#include <optional>
 #include <thread>
 
 #include "common/dataset/dataset.h"
+#include "common/dds/endpoints.h"
+#include "common/dds/ros_conversions.h"
+#include "common/dds/topics.h"
 #include "tests/support/epmapd_fixture.h"
 
 namespace epmap {
@@ -96,6 +105,37 @@ TEST_F(EpServiceE2E, WatchedRegionsFollowTheTrueMovingObject) {
             1u)
       << ctl_watch.Output();
 
+  // A ROS 2 node's view: the disparity and the unexpected-motion mask on their topics.
+  dds::Participant ros_side(domain, "ep-e2e-ros-side");
+  std::mutex ros_mutex;
+  std::map<int64_t, double> ros_mask_share;  // by stamp: share of pixels at 255
+  std::optional<stereo_msgs::msg::DisparityImage> ros_disparity;  // the newest
+  dds::Reader<sensor_msgs::msg::Image, sensor_msgs::msg::ImagePubSubType> mask_reader(
+      ros_side, dds::TopicNames().unexpected_mask,
+      [&](sensor_msgs::msg::Image&& m) {
+        std::string reason;
+        const cv::Mat mask = dds::ImageToMat(m, &reason);
+        std::lock_guard lock(ros_mutex);
+        ros_mask_share[dds::ToNanoseconds(m.header().stamp())] =
+            mask.empty() ? -1.0 : cv::countNonZero(mask) / static_cast<double>(mask.total());
+      },
+      1u << 20);
+  dds::Reader<stereo_msgs::msg::DisparityImage, stereo_msgs::msg::DisparityImagePubSubType>
+      disparity_reader(
+          ros_side, dds::TopicNames().disparity,
+          [&](stereo_msgs::msg::DisparityImage&& m) {
+            std::lock_guard lock(ros_mutex);
+            ros_disparity = std::move(m);
+          },
+          4u << 20);
+  for (int i = 0;
+       i < 1500 && (mask_reader.MatchedWriters() == 0 || disparity_reader.MatchedWriters() == 0);
+       ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  ASSERT_GT(disparity_reader.MatchedWriters(), 0) << "epmapd announced no rt/epmap/disparity";
+  ASSERT_GT(mask_reader.MatchedWriters(), 0) << "epmapd announced no rt/epmap/unexpected_mask";
+
   Replay(domain, work);
   const auto status = WaitUntilAllFramesAreAccountedFor(epmapd, kFrames);
   watch_context.TryCancel();
@@ -141,6 +181,68 @@ TEST_F(EpServiceE2E, WatchedRegionsFollowTheTrueMovingObject) {
   ASSERT_GT(visible, 5) << "the recorded object never showed: the test world changed";
   EXPECT_GE(hit, visible * 8 / 10);
   EXPECT_GE(quiet, absent * 9 / 10);
+
+  // ROS: every mask that arrived is the one the gRPC stream described for its frame, and the
+  // newest disparity is the map GetDisparity serves, unknown pixels below min_disparity.
+  {
+    std::map<int64_t, double> event_share;
+    for (const auto& e : events) event_share[e.stamp_ns()] = e.flagged_share();
+    v1::DisparityMap map;
+    grpc::ClientContext context;
+    ASSERT_TRUE(epmapd.stub().GetDisparity(&context, {}, &map).ok());
+    const auto last_arrived = [&] {
+      std::lock_guard lock(ros_mutex);
+      return ros_disparity && dds::ToNanoseconds(ros_disparity->header().stamp()) == map.stamp_ns();
+    };
+    bool arrived = last_arrived();
+    for (int i = 0; i < 250 && !arrived; ++i) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      arrived = last_arrived();
+    }
+    std::lock_guard lock(ros_mutex);
+    std::printf("ROS: %zu unexpected masks, newest disparity at %lld (served: %lld)\n",
+                ros_mask_share.size(),
+                ros_disparity
+                    ? static_cast<long long>(dds::ToNanoseconds(ros_disparity->header().stamp()))
+                    : -1LL,
+                static_cast<long long>(map.stamp_ns()));
+    EXPECT_GE(ros_mask_share.size(), static_cast<size_t>(kFrames / 2));
+    int compared = 0, masks_with_motion = 0;
+    for (const auto& [stamp, share] : ros_mask_share) {
+      if (!event_share.count(stamp)) continue;  // the stream may skip a frame for a slow reader
+      ++compared;
+      EXPECT_DOUBLE_EQ(share, event_share[stamp]) << "frame at " << stamp;
+      masks_with_motion += share > 0.0;
+    }
+    EXPECT_GE(compared, kFrames / 4);
+    EXPECT_GT(masks_with_motion, 5);
+    ASSERT_TRUE(arrived) << "the last frame's disparity never came on rt/epmap/disparity";
+    const auto& image = ros_disparity->image();
+    ASSERT_EQ(image.width(), map.disparity().width());
+    ASSERT_EQ(image.height(), map.disparity().height());
+    ASSERT_EQ(image.encoding(), "32FC1");
+    EXPECT_EQ(ros_disparity->header().frame_id(), "cam0_optical");
+    EXPECT_FLOAT_EQ(ros_disparity->f(), static_cast<float>(map.camera().fx()));
+    EXPECT_FLOAT_EQ(ros_disparity->t(), static_cast<float>(map.camera().baseline_m()));
+    EXPECT_FLOAT_EQ(ros_disparity->min_disparity(), static_cast<float>(map.min_disparity()));
+    const size_t n = image.width() * image.height();
+    ASSERT_EQ(image.data().size(), n * 4);
+    ASSERT_EQ(map.disparity().data().size(), n * 4);
+    size_t same = 0, known = 0;
+    for (size_t i = 0; i < n; ++i) {
+      float ros, served;
+      std::memcpy(&ros, image.data().data() + 4 * i, 4);
+      std::memcpy(&served, map.disparity().data().data() + 4 * i, 4);
+      if (std::isfinite(served)) {
+        ++known;
+        same += ros == served;
+      } else {
+        same += ros < ros_disparity->min_disparity();
+      }
+    }
+    EXPECT_EQ(same, n);
+    EXPECT_GT(known, n / 2);
+  }
 
   // epmapctl: the JSON stream, the five expectation images, the mask and the regions.
   const std::string watched = ctl_watch.Output();
