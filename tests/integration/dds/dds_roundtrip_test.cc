@@ -17,6 +17,7 @@
 #include "common/dds/endpoints.h"
 #include "common/dds/ros_conversions.h"
 #include "tests/support/test_env.h"
+#include "tests/support/wait_for.h"
 
 namespace epmap {
 namespace {
@@ -24,15 +25,7 @@ namespace {
 using ImageWriter = dds::Writer<sensor_msgs::msg::Image, sensor_msgs::msg::ImagePubSubType>;
 using ImageReader = dds::Reader<sensor_msgs::msg::Image, sensor_msgs::msg::ImagePubSubType>;
 
-template <class Pred>
-bool WaitFor(Pred pred, std::chrono::milliseconds timeout) {
-  const auto deadline = std::chrono::steady_clock::now() + timeout;
-  while (!pred()) {
-    if (std::chrono::steady_clock::now() > deadline) return false;
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
-  }
-  return true;
-}
+using testing::WaitFor;
 
 TEST(DdsRoundTrip, ImagesArriveIntactAndOversizedAreRefused) {
   const uint32_t domain = testing::UniqueDomainId(7);

@@ -15,6 +15,7 @@
 
 #include "common/dds/endpoints.h"
 #include "tests/support/test_env.h"
+#include "tests/support/wait_for.h"
 
 namespace epmap::mapping {
 namespace {
@@ -68,14 +69,7 @@ struct MapListener {
   dds::Reader<nav_msgs::msg::OccupancyGrid, nav_msgs::msg::OccupancyGridPubSubType> reader;
 };
 
-bool WaitFor(const std::function<bool()>& done, std::chrono::milliseconds timeout) {
-  const auto end = std::chrono::steady_clock::now() + timeout;
-  while (!done()) {
-    if (std::chrono::steady_clock::now() > end) return false;
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  }
-  return true;
-}
+using testing::WaitFor;
 
 // One processed frame whose snapshot carries maps with one known grid cell.
 std::shared_ptr<const MapSnapshot> FrameWithMaps(uint64_t frame_index) {

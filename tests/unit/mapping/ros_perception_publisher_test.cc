@@ -23,6 +23,7 @@
 #include "common/dds/endpoints.h"
 #include "common/dds/ros_conversions.h"
 #include "tests/support/test_env.h"
+#include "tests/support/wait_for.h"
 
 namespace epmap::mapping {
 namespace {
@@ -93,14 +94,7 @@ TEST(RosPerceptionPublisher, TheDisparityFollowsStereoMsgsConventions) {
   EXPECT_THROW(ToRosDisparity(empty, &msg), std::invalid_argument);
 }
 
-bool WaitFor(const std::function<bool()>& done, std::chrono::milliseconds timeout) {
-  const auto end = std::chrono::steady_clock::now() + timeout;
-  while (!done()) {
-    if (std::chrono::steady_clock::now() > end) return false;
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  }
-  return true;
-}
+using testing::WaitFor;
 
 // Nothing is converted or written while nobody listens; a reader that joins gets the next
 // frame's disparity and mask, as they were computed.
