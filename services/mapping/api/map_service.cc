@@ -122,7 +122,7 @@ grpc::Status MapServiceImpl::GetDisparity(grpc::ServerContext* context,
   }
   out->set_stamp_ns(snapshot->stamp_ns);
   out->set_frame_index(snapshot->frame_index);
-  ToProto(snapshot->camera, out->mutable_camera());
+  ToProto(snapshot->camera, snapshot->camera_frame(), out->mutable_camera());
   ToProto(snapshot->disparity, out->mutable_disparity());
   out->set_min_disparity(snapshot->min_disparity);
   out->set_num_disparities(snapshot->num_disparities);

@@ -101,7 +101,7 @@ grpc::Status MapServiceImpl::GetExpectation(grpc::ServerContext*, const v1::GetE
   const ep::EpResult& ep = *snapshot->ep;
   out->set_stamp_ns(snapshot->stamp_ns);
   out->set_frame_index(snapshot->frame_index);
-  ToProto(snapshot->camera, out->mutable_camera());
+  ToProto(snapshot->camera, snapshot->camera_frame(), out->mutable_camera());
   // A frame computed whole (first, scheduled refresh, pose jump) had nothing predicted: its
   // grid images stay empty, frame_mode says why, and the masks are still meaningful.
   if (ep.compared) {

@@ -30,7 +30,8 @@ void ToProto(const cv::Mat& image, v1::ByteImage* out) {
   }
 }
 
-void ToProto(const stereo::RectifiedGeometry& g, v1::CameraModel* out) {
+void ToProto(const stereo::RectifiedGeometry& g, const std::string& frame_id,
+             v1::CameraModel* out) {
   out->set_width(static_cast<uint32_t>(g.width));
   out->set_height(static_cast<uint32_t>(g.height));
   out->set_fx(g.fx);
@@ -38,7 +39,7 @@ void ToProto(const stereo::RectifiedGeometry& g, v1::CameraModel* out) {
   out->set_cx(g.cx);
   out->set_cy(g.cy);
   out->set_baseline_m(g.baseline_m);
-  out->set_frame_id("cam0_optical");
+  out->set_frame_id(frame_id);
 }
 
 void ToProto(const Eigen::Vector3d& v, v1::Vector3* out) {

@@ -13,7 +13,8 @@ namespace epmap::mapping {
 
 void ToProto(const cv::Mat& image_f32, v1::FloatImage* out);  // CV_32FC1
 void ToProto(const cv::Mat& image_u8, v1::ByteImage* out);    // CV_8UC1 or CV_8UC3
-void ToProto(const stereo::RectifiedGeometry& g, v1::CameraModel* out);
+// frame_id: the camera frame the images are in (MapSnapshot::camera_frame()).
+void ToProto(const stereo::RectifiedGeometry& g, const std::string& frame_id, v1::CameraModel* out);
 void ToProto(const Eigen::Isometry3d& T, const std::string& parent, const std::string& child,
              v1::Transform* out);
 void ToProto(const Eigen::Vector3d& v, v1::Vector3* out);

@@ -52,6 +52,10 @@ struct MapSnapshot {
   // (null before the first key frame, or when not in mobile-base mode). Shared between
   // snapshots until the next key frame changes the maps.
   std::shared_ptr<const mobile_mapping::MapsSnapshot> maps;
+
+  // The camera frame of the images and the disparity: the left image's frame_id, or the link
+  // the service's chain ends in when the publisher sent none.
+  std::string camera_frame() const { return frame_id.empty() ? "cam0_optical" : frame_id; }
 };
 
 // Holds the newest snapshot; readers may wait for one newer than a stamp or frame.

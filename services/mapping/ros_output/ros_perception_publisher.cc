@@ -12,16 +12,12 @@
 
 namespace epmap::mapping {
 
-std::string CameraFrameOf(const MapSnapshot& snapshot) {
-  return snapshot.frame_id.empty() ? "cam0_optical" : snapshot.frame_id;
-}
-
 void ToRosDisparity(const MapSnapshot& snapshot, stereo_msgs::msg::DisparityImage* out) {
   const cv::Mat& d = snapshot.disparity;
   if (d.empty() || d.type() != CV_32FC1) {
     throw std::invalid_argument("ToRosDisparity: the snapshot has no CV_32FC1 disparity");
   }
-  const std::string frame = CameraFrameOf(snapshot);
+  const std::string frame = snapshot.camera_frame();
   const float invalid = static_cast<float>(snapshot.min_disparity) - 1.0f;
   out->header().stamp(dds::FromNanoseconds(snapshot.stamp_ns));
   out->header().frame_id(frame);
@@ -109,7 +105,7 @@ void RosPerceptionPublisher::Publish(const MapSnapshot& snapshot) {
   if (writers_->mask && writers_->mask->MatchedReaders() > 0 && snapshot.ep &&
       !snapshot.ep->unexpected.empty()) {
     sensor_msgs::msg::Image msg;
-    dds::MatToImage(snapshot.ep->unexpected, snapshot.stamp_ns, CameraFrameOf(snapshot), &msg);
+    dds::MatToImage(snapshot.ep->unexpected, snapshot.stamp_ns, snapshot.camera_frame(), &msg);
     if (writers_->mask->Write(msg)) {
       events_.Increment("ros_unexpected_mask_published");
     } else {

@@ -25,10 +25,6 @@ class Image;
 
 namespace epmap::mapping {
 
-// The camera frame of a snapshot's images: the left image's frame_id, or the URDF link the
-// service's chain ends in when the publisher sent none.
-std::string CameraFrameOf(const MapSnapshot& snapshot);
-
 // The snapshot's disparity in ROS's convention: 32FC1, unknown pixels (NaN) written as
 // min_disparity - 1 ("any disparity less than min_disparity is invalid"); f and t from the
 // rectified geometry (Z = f t / d); the whole image as the valid window (the EP predicts into

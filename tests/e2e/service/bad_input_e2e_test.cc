@@ -21,6 +21,9 @@
 namespace epmap {
 namespace {
 
+// The left camera's frame as a ROS driver names it; the service's replies carry it.
+constexpr const char* kLeftFrame = "stereo_left_optical";
+
 using ImageWriter = dds::Writer<sensor_msgs::msg::Image, sensor_msgs::msg::ImagePubSubType>;
 using InfoWriter =
     dds::Writer<sensor_msgs::msg::CameraInfo, sensor_msgs::msg::CameraInfoPubSubType>;
@@ -110,7 +113,7 @@ class Publisher {
   }
   void Pair(const cv::Mat& l, const cv::Mat& r, int64_t stamp) {
     sensor_msgs::msg::Image msg;
-    dds::MatToImage(l, stamp, "cam0_optical", &msg);
+    dds::MatToImage(l, stamp, kLeftFrame, &msg);
     Left(msg);
     dds::MatToImage(r, stamp, "cam1_optical", &msg);
     Right(msg);
@@ -214,6 +217,15 @@ TEST(BadInputE2E, EveryRefusalIsCountedAndTheServiceKeepsServing) {
   // Good pairs: s+1, s+100, s+400 (the pair at s+300 is refused by the pipeline).
   EXPECT_EQ(status.frames_processed(), 3u) << status.DebugString();
   EXPECT_EQ(status.last_stamp_ns(), s + 400);
+
+  // The good frames' map, in the frame the left images named (it waited for its partner).
+  {
+    v1::DisparityMap newest;
+    grpc::ClientContext newest_context;
+    ASSERT_TRUE(epmapd.stub().GetDisparity(&newest_context, {}, &newest).ok());
+    EXPECT_EQ(newest.stamp_ns(), s + 400);
+    EXPECT_EQ(newest.camera().frame_id(), kLeftFrame);
+  }
 
   // An invalid RPC argument: INVALID_ARGUMENT with a message a person can act on.
   v1::GetDisparityRequest request;

@@ -20,12 +20,15 @@ cv::Mat Img(int w = 8, int h = 6) {
 TEST(StereoSynchronizer, PairsByStampInEitherArrivalOrder) {
   CounterSet rejected;
   StereoSynchronizer sync(1'000'000, 500'000'000, rejected);
-  EXPECT_FALSE(sync.Add(Side::kLeft, 100'000'000, Img()));
-  auto pair = sync.Add(Side::kRight, 100'000'500, Img());  // within 1 ms
+  EXPECT_FALSE(sync.Add(Side::kLeft, 100'000'000, Img(), "left_optical"));
+  auto pair = sync.Add(Side::kRight, 100'000'500, Img(), "right_optical");  // within 1 ms
   ASSERT_TRUE(pair);
-  EXPECT_EQ(pair->stamp_ns, 100'000'000);  // the left stamp names the frame
-  EXPECT_FALSE(sync.Add(Side::kRight, 200'000'000, Img()));
-  ASSERT_TRUE(sync.Add(Side::kLeft, 200'000'000, Img()));
+  EXPECT_EQ(pair->stamp_ns, 100'000'000);     // the left stamp names the frame
+  EXPECT_EQ(pair->frame_id, "left_optical");  // and the left camera's frame
+  EXPECT_FALSE(sync.Add(Side::kRight, 200'000'000, Img(), "right_optical"));
+  pair = sync.Add(Side::kLeft, 200'000'000, Img(), "left_optical");
+  ASSERT_TRUE(pair);
+  EXPECT_EQ(pair->frame_id, "left_optical");
   EXPECT_EQ(rejected.Total(), 0u);
 }
 
