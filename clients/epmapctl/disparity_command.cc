@@ -47,12 +47,12 @@ int Run(const ClientOptions& options, const Args& args) {
     std::cerr << "epmapctl: " << e.what() << "\n";
     return 1;
   }
-  std::printf("wrote %s: %dx%d disparity of frame %llu (stamp %lld ns), %.1f%% known, "
-              "fx %.1f px, baseline %.4f m\n",
-              args.out.c_str(), disparity.cols, disparity.rows,
-              static_cast<unsigned long long>(map.frame_index()),
-              static_cast<long long>(map.stamp_ns()), 100.0 * map.valid_share(),
-              map.camera().fx(), map.camera().baseline_m());
+  std::printf(
+      "wrote %s: %dx%d disparity of frame %llu (stamp %lld ns), %.1f%% known, "
+      "fx %.1f px, baseline %.4f m\n",
+      args.out.c_str(), disparity.cols, disparity.rows,
+      static_cast<unsigned long long>(map.frame_index()), static_cast<long long>(map.stamp_ns()),
+      100.0 * map.valid_share(), map.camera().fx(), map.camera().baseline_m());
   return 0;
 }
 

@@ -70,7 +70,7 @@ void MappingService::Shutdown() {
   }
   ros_maps_.reset();  // before the participant they write through
   ros_perception_.reset();
-  ingest_.reset();    // no more DDS callbacks
+  ingest_.reset();  // no more DDS callbacks
   queue_.Close();
   if (pipeline_) pipeline_->Stop();
   if (calibration_) calibration_->Shutdown();

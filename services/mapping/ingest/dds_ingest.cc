@@ -22,7 +22,9 @@ DdsIngest::DdsIngest(const ServiceConfig& config, BoundedQueue<StereoFrame>& que
 
   left_image_ = std::make_unique<ImageReader>(
       *participant_, t.left_image,
-      [this](sensor_msgs::msg::Image&& m) { OnImage(StereoSynchronizer::Side::kLeft, std::move(m)); },
+      [this](sensor_msgs::msg::Image&& m) {
+        OnImage(StereoSynchronizer::Side::kLeft, std::move(m));
+      },
       config.max_image_bytes);
   right_image_ = std::make_unique<ImageReader>(
       *participant_, t.right_image,

@@ -13,7 +13,7 @@ struct StereoFrame {
   int64_t stamp_ns = 0;
   cv::Mat left;
   cv::Mat right;
-  std::string frame_id;  // the left image's header.frame_id
+  std::string frame_id;                             // the left image's header.frame_id
   std::chrono::steady_clock::time_point assembled;  // for ingest-to-snapshot latency
 };
 

@@ -6,7 +6,9 @@
 namespace epmap::mapping {
 
 namespace {
-const char* SideName(int side) { return side == 0 ? "left_image" : "right_image"; }
+const char* SideName(int side) {
+  return side == 0 ? "left_image" : "right_image";
+}
 constexpr size_t kMaxPending = 16;  // per side; bounds memory if one camera goes silent
 }  // namespace
 
