@@ -49,6 +49,12 @@ int64_t WallNs() {
       .count();
 }
 
+// From a message's stamp (the replay stamps with the wall clock it sends at) to now.
+template <class Msg>
+double MsSinceStamp(const Msg& msg) {
+  return (WallNs() - epmap::dds::ToNanoseconds(msg.header().stamp())) / 1e6;
+}
+
 uint64_t Count(const google::protobuf::RepeatedPtrField<epmap::v1::Counter>& counters,
                const std::string& reason) {
   for (const auto& c : counters) {
@@ -124,7 +130,7 @@ int Run(int argc, char** argv) {
       epmap::dds::Reader<sensor_msgs::msg::Image, sensor_msgs::msg::ImagePubSubType> baseline(
           participant, epmap::dds::TopicNames().left_image,
           [&](sensor_msgs::msg::Image&& msg) {
-            const double ms = (WallNs() - epmap::dds::ToNanoseconds(msg.header().stamp())) / 1e6;
+            const double ms = MsSinceStamp(msg);
             std::lock_guard lock(mutex);
             transport_ms.push_back(ms);
           },
@@ -142,7 +148,7 @@ int Run(int argc, char** argv) {
         ros_disparity.emplace(
             participant, epmap::dds::TopicNames().disparity,
             [&](stereo_msgs::msg::DisparityImage&& msg) {
-              const double ms = (WallNs() - epmap::dds::ToNanoseconds(msg.header().stamp())) / 1e6;
+              const double ms = MsSinceStamp(msg);
               std::lock_guard lock(mutex);
               ros_disparity_ms.push_back(ms);
             },
