@@ -134,8 +134,9 @@ double DirectionAngleDeg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
 Eigen::Isometry3d KinematicPrior(const kinematics::UrdfChain& chain,
                                  const std::vector<double>& joints) {
   if (!chain.has_cam1()) {
-    throw CalibrationError(ErrorCode::kInvalidInput,
-                           "the URDF has no cam1_optical link: no kinematic stereo prior");
+    throw CalibrationError(ErrorCode::kInvalidInput, "the URDF has no right camera link '" +
+                                                         chain.camera_links().right +
+                                                         "': no kinematic stereo prior");
   }
   try {
     return chain.Cam0Pose(joints).inverse() * chain.Cam1Pose(joints);

@@ -15,8 +15,6 @@
 namespace epmap::kinematics {
 
 namespace {
-constexpr const char* kCam0 = "cam0_optical";
-constexpr const char* kCam1 = "cam1_optical";
 
 Eigen::Isometry3d ToEigen(const KDL::Frame& f) {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
@@ -31,6 +29,7 @@ Eigen::Isometry3d ToEigen(const KDL::Frame& f) {
 struct UrdfChain::Impl {
   KDL::Tree tree;
   std::string root;
+  CameraLinks links;
   std::vector<std::string> joint_names;  // union of the movable joints of the camera chains
   bool has_cam1 = false;
   // For each bound input position, the index into joint_names (or -1 if unused).
@@ -108,19 +107,19 @@ UrdfChain::UrdfChain(UrdfChain&&) noexcept = default;
 UrdfChain& UrdfChain::operator=(UrdfChain&&) noexcept = default;
 UrdfChain::~UrdfChain() = default;
 
-UrdfChain UrdfChain::FromFile(const std::filesystem::path& urdf_path) {
+UrdfChain UrdfChain::FromFile(const std::filesystem::path& urdf_path, const CameraLinks& links) {
   std::ifstream in(urdf_path);
   if (!in) throw std::runtime_error("cannot open URDF " + urdf_path.string());
   std::stringstream text;
   text << in.rdbuf();
   try {
-    return FromString(text.str());
+    return FromString(text.str(), links);
   } catch (const std::exception& e) {
     throw std::runtime_error(urdf_path.string() + ": " + e.what());
   }
 }
 
-UrdfChain UrdfChain::FromString(const std::string& urdf_xml) {
+UrdfChain UrdfChain::FromString(const std::string& urdf_xml, const CameraLinks& links) {
   const urdf::ModelInterfaceSharedPtr model = urdf::parseURDF(urdf_xml);
   if (!model) throw std::runtime_error("the URDF does not parse");
   auto impl = std::make_unique<Impl>();
@@ -128,13 +127,23 @@ UrdfChain UrdfChain::FromString(const std::string& urdf_xml) {
     throw std::runtime_error("the URDF cannot be turned into a KDL tree");
   }
   impl->root = impl->tree.getRootSegment()->first;
+  impl->links = links;
   const auto& segments = impl->tree.getSegments();
-  if (segments.find(kCam0) == segments.end()) {
-    throw std::runtime_error(std::string("the URDF has no link named '") + kCam0 + "'");
+  if (segments.find(links.left) == segments.end()) {
+    // Name the candidates: a robot's URDF names its optical frames its own way.
+    std::string optical;
+    for (const auto& [name, segment] : segments) {
+      if (name.find("optical") == std::string::npos) continue;
+      optical += (optical.empty() ? "" : ", ") + name;
+    }
+    throw std::runtime_error("the URDF has no link named '" + links.left + "'" +
+                             (optical.empty()
+                                  ? std::string()
+                                  : " (links that look like optical frames: " + optical + ")"));
   }
-  impl->has_cam1 = segments.find(kCam1) != segments.end();
-  for (const char* cam : {kCam0, kCam1}) {
-    if (std::string(cam) == kCam1 && !impl->has_cam1) continue;
+  impl->has_cam1 = segments.find(links.right) != segments.end();
+  for (const std::string& cam : {links.left, links.right}) {
+    if (cam == links.right && !impl->has_cam1) continue;
     KDL::Chain chain;
     impl->tree.getChain(impl->root, cam, chain);
     for (const auto& seg : chain.segments) {
@@ -146,13 +155,16 @@ UrdfChain UrdfChain::FromString(const std::string& urdf_xml) {
       }
     }
   }
-  impl->chains.emplace(kCam0, impl->Chain(kCam0));
-  if (impl->has_cam1) impl->chains.emplace(kCam1, impl->Chain(kCam1));
+  impl->chains.emplace(links.left, impl->Chain(links.left));
+  if (impl->has_cam1) impl->chains.emplace(links.right, impl->Chain(links.right));
   return UrdfChain(std::move(impl));
 }
 
 const std::string& UrdfChain::root_link() const {
   return impl_->root;
+}
+const CameraLinks& UrdfChain::camera_links() const {
+  return impl_->links;
 }
 const std::vector<std::string>& UrdfChain::joint_names() const {
   return impl_->joint_names;
@@ -184,12 +196,14 @@ void UrdfChain::BindJointOrder(const std::vector<std::string>& names) {
 }
 
 Eigen::Isometry3d UrdfChain::Cam0Pose(const std::vector<double>& joints) const {
-  return impl_->Pose(kCam0, joints);
+  return impl_->Pose(impl_->links.left, joints);
 }
 
 Eigen::Isometry3d UrdfChain::Cam1Pose(const std::vector<double>& joints) const {
-  if (!impl_->has_cam1) throw std::invalid_argument("the URDF has no cam1_optical link");
-  return impl_->Pose(kCam1, joints);
+  if (!impl_->has_cam1) {
+    throw std::invalid_argument("the URDF has no link named '" + impl_->links.right + "'");
+  }
+  return impl_->Pose(impl_->links.right, joints);
 }
 
 Eigen::Isometry3d UrdfChain::LinkPose(const std::string& link,

@@ -12,20 +12,29 @@
 
 namespace epmap::kinematics {
 
+// The links of the two cameras' optical frames (x right, y down, z forward). The defaults are
+// the dataset layout's names; a robot's own URDF usually has others (e.g.
+// "left_camera_optical_frame"), which epmapd takes from robot.left_camera_link / right_camera_link.
+struct CameraLinks {
+  std::string left = "cam0_optical";
+  std::string right = "cam1_optical";
+};
+
 class UrdfChain {
  public:
-  // Parses the URDF and extracts the chains root -> cam0_optical (required) and root ->
-  // cam1_optical (optional). Throws std::runtime_error with the reason on an unparsable URDF
-  // or a missing cam0_optical link.
-  static UrdfChain FromFile(const std::filesystem::path& urdf_path);
-  static UrdfChain FromString(const std::string& urdf_xml);
+  // Parses the URDF and extracts the chains root -> links.left (required) and root ->
+  // links.right (optional). Throws std::runtime_error with the reason on an unparsable URDF
+  // or a missing left camera link (the message lists the links that look like optical frames).
+  static UrdfChain FromFile(const std::filesystem::path& urdf_path, const CameraLinks& links = {});
+  static UrdfChain FromString(const std::string& urdf_xml, const CameraLinks& links = {});
 
   UrdfChain(UrdfChain&&) noexcept;
   UrdfChain& operator=(UrdfChain&&) noexcept;
   ~UrdfChain();
 
   const std::string& root_link() const;
-  // The movable joints on the way to cam0_optical (and cam1_optical), in chain order.
+  const CameraLinks& camera_links() const;
+  // The movable joints on the way to the left camera (and the right one), in chain order.
   const std::vector<std::string>& joint_names() const;
   bool has_cam1() const;
 
@@ -34,8 +43,9 @@ class UrdfChain {
   // listing the chain joints that are missing.
   void BindJointOrder(const std::vector<std::string>& names);
 
-  // T_root_cam0 (and T_root_cam1) for joint values in the bound order (or in joint_names()
-  // order if nothing was bound). Throws std::invalid_argument on a wrong count or NaN.
+  // T_root_cam0 (and T_root_cam1: the left and right camera links) for joint values in the bound
+  // order (or in joint_names() order if nothing was bound). Throws std::invalid_argument on a wrong
+  // count or NaN.
   Eigen::Isometry3d Cam0Pose(const std::vector<double>& joints) const;
   Eigen::Isometry3d Cam1Pose(const std::vector<double>& joints) const;
   // Pose of any link of the tree.

@@ -129,10 +129,12 @@ grpc::Status MapServiceImpl::GetDisparity(grpc::ServerContext* context,
   out->set_valid_share(snapshot->valid_share);
   out->set_recomputed_share(snapshot->recomputed_share);
   if (snapshot->T_base_cam0) {
-    ToProto(*snapshot->T_base_cam0, "base", "cam0_optical", out->mutable_camera_pose());
+    ToProto(*snapshot->T_base_cam0, snapshot->base_frame, snapshot->camera_link,
+            out->mutable_camera_pose());
   }
   if (snapshot->T_odom_base) {
-    ToProto(*snapshot->T_odom_base, "odom", "base", out->mutable_base_pose());
+    ToProto(*snapshot->T_odom_base, service_.config().maps.odom_frame, snapshot->base_frame,
+            out->mutable_base_pose());
   }
   return grpc::Status::OK;
 }

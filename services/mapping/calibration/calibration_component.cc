@@ -4,6 +4,7 @@
 
 #include "common/dds/ros_conversions.h"
 #include "services/mapping/calibration/eye_hand_job.h"
+#include "services/mapping/config/camera_chain.h"
 
 namespace epmap::mapping {
 
@@ -23,7 +24,7 @@ constexpr size_t kMaxPendingDdsBatches = 256;
 CalibrationComponent::CalibrationComponent(const ServiceConfig& config, SensorState& sensors,
                                            IngestCounters& counters)
     : counters_(counters) {
-  if (!config.urdf.empty()) chain_ = kinematics::UrdfChain::FromFile(config.urdf);
+  if (!config.urdf.empty()) chain_ = LoadCameraChain(config);
   if (!config.state_dir.empty()) {
     try {
       store_ = std::make_unique<CalibrationStore>(config.state_dir);

@@ -113,13 +113,14 @@ StereoJobResult RunStereoJob(const v1::StereoExtrinsicsSpec& spec_in,
   if (!env.chain) {
     throw CalibrationError(ErrorCode::kInvalidInput,
                            "the stereo-extrinsics job needs the head's kinematics for its prior: "
-                           "start epmapd with --urdf FILE (a URDF with links cam0_optical and "
-                           "cam1_optical)");
+                           "start epmapd with --urdf FILE (a URDF with both cameras' optical "
+                           "links, robot.left_camera_link and robot.right_camera_link)");
   }
   if (!env.chain->has_cam1()) {
     throw CalibrationError(ErrorCode::kInvalidInput,
-                           "the URDF " + env.urdf_path +
-                               " has no cam1_optical link: the stereo-extrinsics job needs the "
+                           "the URDF " + env.urdf_path + " has no link named '" +
+                               env.chain->camera_links().right +
+                               "' (robot.right_camera_link): the stereo-extrinsics job needs the "
                                "chain to both cameras for its kinematic prior");
   }
   const int n = static_cast<int>(spec.frames());

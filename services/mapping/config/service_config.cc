@@ -109,6 +109,8 @@ void Apply(const YAML::Node& root, ServiceConfig& c) {
     auto s = top.Sub("robot");
     s.Get("mode", c.mode);
     s.Get("urdf", c.urdf);
+    s.Get("left_camera_link", c.left_camera_link);
+    s.Get("right_camera_link", c.right_camera_link);
     auto cam = s.Sub("camera");
     cam.Get("enabled", c.camera.enabled);
     cam.Get("width", c.camera.width);
@@ -202,6 +204,13 @@ void ServiceConfig::Validate() const {
   if (pair_tolerance_ns < 0 || pair_timeout_ns <= 0) bad("ingest pairing times must be positive");
   static const std::set<std::string> kModes{"auto", "head", "static", "mobile-base"};
   if (!kModes.count(mode)) bad("robot.mode must be auto, head, static or mobile-base");
+  if (left_camera_link.empty() || right_camera_link.empty()) {
+    bad("robot.left_camera_link and robot.right_camera_link must name URDF links");
+  }
+  if (left_camera_link == right_camera_link) {
+    bad("robot.left_camera_link and robot.right_camera_link must differ, both are '" +
+        left_camera_link + "'");
+  }
   if (camera.enabled && (camera.width <= 0 || camera.height <= 0 || camera.fx <= 0 ||
                          camera.fy <= 0 || camera.baseline_m <= 0)) {
     bad("robot.camera: width, height, fx, fy and baseline_m must be positive when enabled");
@@ -348,6 +357,8 @@ std::string ToYaml(const ServiceConfig& c) {
   out << YAML::Key << "robot" << YAML::Value << YAML::BeginMap;
   out << YAML::Key << "mode" << YAML::Value << c.mode;
   out << YAML::Key << "urdf" << YAML::Value << c.urdf;
+  out << YAML::Key << "left_camera_link" << YAML::Value << c.left_camera_link;
+  out << YAML::Key << "right_camera_link" << YAML::Value << c.right_camera_link;
   out << YAML::Key << "camera" << YAML::Value << YAML::BeginMap;
   out << YAML::Key << "enabled" << YAML::Value << c.camera.enabled;
   out << YAML::Key << "width" << YAML::Value << c.camera.width;

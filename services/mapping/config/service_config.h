@@ -110,7 +110,11 @@ struct ServiceConfig {
 
   // --- robot ---
   std::string mode = "auto";  // auto | head | static | mobile-base
-  std::string urdf;           // kinematic chain (links cam0_optical, cam1_optical)
+  std::string urdf;           // kinematic chain from the base to the cameras' optical links
+  // The URDF's links of the two cameras' optical frames (x right, y down, z forward); the
+  // defaults are the dataset layout's names, a robot's own URDF usually has others.
+  std::string left_camera_link = "cam0_optical";
+  std::string right_camera_link = "cam1_optical";
   ConfiguredCamera camera;
 
   // --- stereo ---

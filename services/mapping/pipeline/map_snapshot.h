@@ -39,6 +39,10 @@ struct MapSnapshot {
   cv::Mat left_rectified;                        // the image the disparity belongs to
   std::optional<Eigen::Isometry3d> T_base_cam0;  // when a kinematic pose is known
   std::optional<Eigen::Isometry3d> T_odom_base;  // mobile base: from odometry
+  // The frames of those poses: the URDF's root link ("base" without a URDF) and the left
+  // camera's optical link (robot.left_camera_link), as a tf tree built from the URDF names them.
+  std::string base_frame = "base";
+  std::string camera_link = "cam0_optical";
   double recomputed_share = 1.0;  // share of pixels whose disparity was computed this frame
   double valid_share = 0.0;       // share of pixels with a finite disparity
   // The expected-perception result of this frame (null when EP is disabled): predicted image,
@@ -53,9 +57,9 @@ struct MapSnapshot {
   // snapshots until the next key frame changes the maps.
   std::shared_ptr<const mobile_mapping::MapsSnapshot> maps;
 
-  // The camera frame of the images and the disparity: the left image's frame_id, or the link
-  // the service's chain ends in when the publisher sent none.
-  std::string camera_frame() const { return frame_id.empty() ? "cam0_optical" : frame_id; }
+  // The camera frame of the images and the disparity: the left image's frame_id, or the left
+  // camera's link when the publisher sent none.
+  std::string camera_frame() const { return frame_id.empty() ? camera_link : frame_id; }
 };
 
 // Holds the newest snapshot; readers may wait for one newer than a stamp or frame.

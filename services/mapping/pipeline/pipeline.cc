@@ -6,6 +6,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "perception/mobile_mapping/joint_limits.h"
+#include "services/mapping/config/camera_chain.h"
 
 namespace epmap::mapping {
 
@@ -64,15 +65,30 @@ Pipeline::Pipeline(const ServiceConfig& config, BoundedQueue<StereoFrame>& queue
       matcher_(config.sgbm),
       ep_params_(MakeEpParams(config)) {
   if (!config.urdf.empty()) {
-    chain_ = kinematics::UrdfChain::FromFile(config.urdf);
-    spdlog::info("kinematic chain from {}: root '{}', joints [{}]", config.urdf,
-                 chain_->root_link(), fmt::join(chain_->joint_names(), ", "));
+    chain_ = LoadCameraChain(config);
+    spdlog::info("kinematic chain from {}: root '{}' to '{}'{}, joints [{}]", config.urdf,
+                 chain_->root_link(), config.left_camera_link,
+                 chain_->has_cam1() ? " and '" + config.right_camera_link + "'" : "",
+                 fmt::join(chain_->joint_names(), ", "));
     if (!chain_->joint_names().empty()) {
       // The maps refuse key frames whose joints (the pan) read outside these limits.
       joint_limits_ = mobile_mapping::JointLimitsFromUrdfFile(config.urdf, chain_->joint_names());
     }
   }
   SetUpPoseSource();
+}
+
+void Pipeline::WarnOnceIfTheImagesAreNotInTheUrdfCameraFrame(const std::string& image_frame_id) {
+  if (warned_camera_frame_ || image_frame_id.empty() ||
+      image_frame_id == config_.left_camera_link) {
+    return;
+  }
+  warned_camera_frame_ = true;
+  spdlog::warn(
+      "the left images are in frame '{}' but the URDF's left camera link is '{}' "
+      "(robot.left_camera_link): the disparity is published in '{}', the camera poses name '{}'",
+      image_frame_id, config_.left_camera_link, image_frame_id, config_.left_camera_link);
+  events_.Increment("camera_frame_not_urdf_link:" + image_frame_id);
 }
 
 Pipeline::~Pipeline() {
@@ -180,6 +196,11 @@ void Pipeline::Process(StereoFrame& frame) {
   snapshot->frame_index = processed_.load() + 1;
   snapshot->stamp_ns = frame.stamp_ns;
   snapshot->frame_id = frame.frame_id;
+  snapshot->camera_link = config_.left_camera_link;
+  if (chain_) {
+    snapshot->base_frame = chain_->root_link();
+    WarnOnceIfTheImagesAreNotInTheUrdfCameraFrame(frame.frame_id);
+  }
   snapshot->camera = rectifier->geometry();
   snapshot->min_disparity = config_.sgbm.min_disparity;
   snapshot->num_disparities = config_.sgbm.num_disparities;

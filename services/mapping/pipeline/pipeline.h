@@ -65,6 +65,9 @@ class Pipeline {
   // inputs are missing (pipeline_ep.cc).
   std::optional<FramePose> PoseAt(int64_t stamp_ns, std::string* reason);
   void SetUpPoseSource();
+  // Says once (log and status event) when the left images name another camera frame than the
+  // URDF's left camera link: tf consumers then see the disparity and the poses in two frames.
+  void WarnOnceIfTheImagesAreNotInTheUrdfCameraFrame(const std::string& image_frame_id);
   // The EP map of this frame into the snapshot (pipeline_ep.cc).
   void RunExpectedPerception(const StereoFrame& frame, const stereo::Rectifier& rectifier,
                              const cv::Mat& left, const cv::Mat& right,
@@ -86,6 +89,7 @@ class Pipeline {
   SnapshotStore& snapshots_;
 
   std::optional<kinematics::UrdfChain> chain_;
+  bool warned_camera_frame_ = false;
   std::string pose_source_;  // as configured (auto resolves per frame)
   std::optional<internal_model::LearnedPoseSource> learned_;
   std::vector<std::string> learned_inputs_;

@@ -38,7 +38,7 @@ void Pipeline::SetUpPoseSource() {
   }
   if (pose_source_ == "odometry" && !chain_) {
     throw std::runtime_error(
-        "ep.pose_source odometry needs robot.urdf (the chain from the base to cam0_optical)");
+        "ep.pose_source odometry needs robot.urdf (the chain from the base to the left camera)");
   }
   if (pose_source_ == "learned") {
     try {
@@ -70,7 +70,7 @@ std::optional<FramePose> Pipeline::PoseAt(int64_t stamp_ns, std::string* reason)
     if (!joints) return std::nullopt;
     return FramePose{learned_->CameraPose({*joints, std::nullopt}), std::nullopt};
   }
-  // urdf and odometry: the chain from the base to cam0_optical.
+  // urdf and odometry: the chain from the base to the left camera (robot.left_camera_link).
   const auto joints =
       sensors_.JointsAt(stamp_ns, chain_->joint_names(), config_.joints_max_gap_ns, wait, reason);
   if (!joints) return std::nullopt;

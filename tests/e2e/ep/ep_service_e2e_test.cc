@@ -1,8 +1,9 @@
 // Expected perception in the running service: a recorded synthetic head (with its true
 // unexpected-motion masks) replayed over real DDS into a real epmapd that predicts from the
 // dataset's URDF; WatchUnexpected, GetUnexpectedRegions, GetExpectation and the epmapctl
-// commands built on them checked against the ground truth. Then the bad input of issue 4: a
-// URDF without cam0_optical, joints the URDF does not name, pose jumps beyond the bound.
+// commands built on them checked against the ground truth. A robot's own URDF link names, set
+// in the config. Then the bad input of issue 4: a URDF without its camera link, joints the URDF
+// does not name, pose jumps beyond the bound.
 
 #include <epmap_dds/DisparityImagePubSubTypes.h>
 #include <epmap_dds/ImagePubSubTypes.h>
@@ -11,6 +12,7 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <mutex>
 #include <opencv2/imgcodecs.hpp>
@@ -304,6 +306,57 @@ TEST_F(EpServiceE2E, UrdfWithoutCam0OpticalIsAClearStartupError) {
       work / "epmapd.log", seconds(30));
   EXPECT_NE(code, 0) << out;
   EXPECT_NE(out.find("cam0_optical"), std::string::npos) << out;
+  EXPECT_NE(out.find("robot.left_camera_link"), std::string::npos) << out;
+  fs::remove_all(work);
+}
+
+TEST_F(EpServiceE2E, ARobotsOwnUrdfLinkNamesComeFromTheConfig) {
+  // The head's URDF as a robot's own would name it: root base_footprint, optical frames
+  // *_camera_optical_frame. With robot.left/right_camera_link set, the EP predicts from that
+  // chain and GetDisparity names the robot's frames.
+  const auto work = testing::FreshTempDir("ep-own-links");
+  std::ifstream in(Urdf());
+  std::string urdf((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const auto rename = [&urdf](const std::string& from, const std::string& to) {
+    size_t n = 0;
+    for (size_t p; (p = urdf.find('"' + from + '"')) != std::string::npos; ++n) {
+      urdf.replace(p + 1, from.size(), to);
+    }
+    return n;
+  };
+  ASSERT_GT(rename("base_link", "base_footprint"), 0u);
+  ASSERT_GT(rename("cam0_optical", "left_camera_optical_frame"), 0u);
+  ASSERT_GT(rename("cam1_optical", "right_camera_optical_frame"), 0u);
+  const auto robot_urdf = work / "robot.urdf";
+  std::ofstream(robot_urdf) << urdf;
+  const auto config = work / "epmapd.yaml";
+  std::ofstream(config) << "robot:\n  left_camera_link: left_camera_optical_frame\n"
+                           "  right_camera_link: right_camera_optical_frame\n"
+                           "ep:\n  pose_source: urdf\n";
+  const uint32_t domain = testing::UniqueDomainId(45);
+  testing::Epmapd epmapd(domain, {"--config", config.string(), "--urdf", robot_urdf.string()},
+                         work);
+  ASSERT_TRUE(epmapd.WaitReady()) << epmapd.process().Output();
+  constexpr uint64_t kSent = 15;
+  Replay(domain, work, 15);
+  const auto status = WaitUntilAllFramesAreAccountedFor(epmapd, kSent);
+  ASSERT_GE(status.frames_processed(), 10u) << status.DebugString();
+  // Predicted from the renamed chain: no frame lacked a pose, most were not computed whole.
+  for (const auto& e : status.events()) {
+    EXPECT_NE(e.reason().rfind("ep_restart_no_pose", 0), 0u) << status.DebugString();
+  }
+  EXPECT_LT(status.full_refreshes(), status.frames_processed()) << status.DebugString();
+  // The replay sends its images in "cam0_optical", which this URDF does not have: said once.
+  EXPECT_EQ(testing::Epmapd::Count(status.events(), "camera_frame_not_urdf_link:cam0_optical"), 1u)
+      << status.DebugString();
+  grpc::ClientContext context;
+  v1::DisparityMap map;
+  ASSERT_TRUE(epmapd.stub().GetDisparity(&context, {}, &map).ok());
+  EXPECT_EQ(map.camera_pose().parent_frame(), "base_footprint");
+  EXPECT_EQ(map.camera_pose().child_frame(), "left_camera_optical_frame");
+  EXPECT_EQ(map.camera().frame_id(), "cam0_optical");  // the images' own frame
+  epmapd.process().Signal(SIGTERM);
+  EXPECT_EQ(epmapd.process().Wait(seconds(10)), 0) << epmapd.process().Output();
   fs::remove_all(work);
 }
 

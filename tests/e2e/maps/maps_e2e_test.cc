@@ -569,11 +569,14 @@ TEST_F(MapsFromPublishedFrames, BadInputIsCountedAndTheMapsStayIntact) {
   v1::DisparityMap disparity;
   ASSERT_TRUE(epmapd.stub().GetDisparity(&disparity_context, newest, &disparity).ok());
   EXPECT_EQ(disparity.stamp_ns(), stamp(9));
-  EXPECT_EQ(disparity.camera_pose().parent_frame(), "base");
+  // The frames are the URDF's: its root link and the left camera's optical link.
+  EXPECT_EQ(disparity.camera_pose().parent_frame(), "base_link");
+  EXPECT_EQ(disparity.camera_pose().child_frame(), "cam0_optical");
   EXPECT_LT(disparity.camera_pose().translation().x(), 0.5)
       << disparity.camera_pose().DebugString();
   ASSERT_TRUE(disparity.has_base_pose());
   EXPECT_EQ(disparity.base_pose().parent_frame(), "odom");
+  EXPECT_EQ(disparity.base_pose().child_frame(), "base_link");
   EXPECT_NEAR(disparity.base_pose().translation().x(), 0.3 * 9, 1e-6);
   grpc::ClientContext grid_context;
   v1::GetOccupancyGridRequest request;

@@ -56,5 +56,40 @@ TEST(UrdfChain, ClearErrors) {
   EXPECT_THROW(chain.Cam0Pose({0.1, std::nan("")}), std::invalid_argument);
 }
 
+// kTwoJointUrdf with every occurrence of `from` renamed `to`.
+std::string Renamed(std::string urdf, const std::string& from, const std::string& to) {
+  for (size_t p; (p = urdf.find(from)) != std::string::npos;) urdf.replace(p, from.size(), to);
+  return urdf;
+}
+
+TEST(UrdfChain, ARobotsOwnCameraLinkNames) {
+  // A robot's URDF names its optical frames its own way: the same chain under other names.
+  const std::string urdf = Renamed(kTwoJointUrdf, "cam0_optical", "left_camera_optical_frame");
+  const kinematics::CameraLinks links{"left_camera_optical_frame", "right_camera_optical_frame"};
+  const auto named = kinematics::UrdfChain::FromString(urdf, links);
+  const auto reference = kinematics::UrdfChain::FromString(kTwoJointUrdf);
+  EXPECT_EQ(named.camera_links().left, "left_camera_optical_frame");
+  EXPECT_EQ(named.joint_names(), reference.joint_names());
+  EXPECT_FALSE(named.has_cam1());
+  EXPECT_TRUE(named.Cam0Pose({0.3, -0.2}).isApprox(reference.Cam0Pose({0.3, -0.2}), 1e-12));
+  try {
+    named.Cam1Pose({0.3, -0.2});
+    ADD_FAILURE() << "no right camera link, yet a pose";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("right_camera_optical_frame"), std::string::npos)
+        << e.what();
+  }
+  // Under the default names that URDF has no camera: the error names the link it looked for
+  // and the links that look like optical frames.
+  try {
+    kinematics::UrdfChain::FromString(urdf);
+    ADD_FAILURE() << "loaded without a cam0_optical link";
+  } catch (const std::runtime_error& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("'cam0_optical'"), std::string::npos) << what;
+    EXPECT_NE(what.find("left_camera_optical_frame"), std::string::npos) << what;
+  }
+}
+
 }  // namespace
 }  // namespace epmap

@@ -105,5 +105,33 @@ TEST(ServiceConfig, RosOutputTopicsAndFramesAreReadAndChecked) {
   EXPECT_THROW(d.Validate(), std::invalid_argument);
 }
 
+TEST(ServiceConfig, CameraLinksOfARobotsOwnUrdf) {
+  ServiceConfig c;
+  EXPECT_EQ(c.left_camera_link, "cam0_optical");  // the dataset layout's names by default
+  EXPECT_EQ(c.right_camera_link, "cam1_optical");
+  mapping::ApplyYaml(
+      "robot:\n  left_camera_link: \"zed_left_camera_optical_frame\"\n"
+      "  right_camera_link: \"zed_right_camera_optical_frame\"\n",
+      c);
+  EXPECT_EQ(c.left_camera_link, "zed_left_camera_optical_frame");
+  EXPECT_EQ(c.right_camera_link, "zed_right_camera_optical_frame");
+  EXPECT_NO_THROW(c.Validate());
+  ServiceConfig back;
+  mapping::ApplyYaml(mapping::ToYaml(c), back);
+  EXPECT_EQ(back.left_camera_link, c.left_camera_link);
+  for (const auto& [left, right] : {std::pair{"", "cam1_optical"}, std::pair{"cam", "cam"}}) {
+    ServiceConfig bad;
+    bad.left_camera_link = left;
+    bad.right_camera_link = right;
+    try {
+      bad.Validate();
+      ADD_FAILURE() << "accepted left '" << left << "', right '" << right << "'";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("robot.left_camera_link"), std::string::npos)
+          << e.what();
+    }
+  }
+}
+
 }  // namespace
 }  // namespace epmap
