@@ -143,7 +143,13 @@ while kill -0 "$SIM" 2>/dev/null; do
   else
     status
   fi
-  echo "   $(( $(date +%s) - START )) s: $(grep -m1 '^frames:' "$OUT/status.txt" 2>/dev/null || echo 'waiting for the first frame')"
+  LINE="$(grep -m1 '^frames:' "$OUT/status.txt" 2>/dev/null || echo 'waiting for the first frame')"
+  if [ "$SCENARIO" = building ]; then
+    # The maps' progress: key frames taken so far (the pictures follow every --refresh s).
+    KEY_FRAMES=$(awk '$1 == "maps_key_frames" {print $2}' "$OUT/status.txt" 2>/dev/null)
+    LINE="$LINE; ${KEY_FRAMES:-0} key frames mapped"
+  fi
+  echo "   $(( $(date +%s) - START )) s: $LINE"
 done
 sleep 1
 snapshot all
