@@ -71,6 +71,7 @@ DdsIngest::DdsIngest(const ServiceConfig& config, BoundedQueue<StereoFrame>& que
           counters_.rejected.Increment("odometry:" + reason);
           return;
         }
+        sensors_.SetOdometryFrames(msg.header().frame_id(), msg.child_frame_id());
         sensors_.AddOdometry(*odom);
       },
       kSmallMessageBytes, 50);

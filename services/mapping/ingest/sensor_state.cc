@@ -31,9 +31,12 @@ SensorState::CameraInfos SensorState::camera_infos() const {
 
 bool SensorState::WaitForCameraInfos(std::chrono::nanoseconds timeout) {
   std::unique_lock lock(mutex_);
-  return changed_.wait_for(lock, timeout, [&] {
-    return interrupted_ || (infos_.left.has_value() && infos_.right.has_value());
-  }) && infos_.left && infos_.right;
+  return changed_.wait_for(lock, timeout,
+                           [&] {
+                             return interrupted_ ||
+                                    (infos_.left.has_value() && infos_.right.has_value());
+                           }) &&
+         infos_.left && infos_.right;
 }
 
 void SensorState::AddJoints(dds::JointReading reading) {
@@ -73,9 +76,9 @@ std::optional<std::vector<double>> SensorState::JointsAt(int64_t stamp_ns,
     *reason = "no_joint_states";
     return std::nullopt;
   }
-  const auto after = std::lower_bound(
-      joints_.begin(), joints_.end(), stamp_ns,
-      [](const dds::JointReading& r, int64_t t) { return r.stamp_ns < t; });
+  const auto after =
+      std::lower_bound(joints_.begin(), joints_.end(), stamp_ns,
+                       [](const dds::JointReading& r, int64_t t) { return r.stamp_ns < t; });
   const dds::JointReading* lo = nullptr;
   const dds::JointReading* hi = nullptr;
   if (after == joints_.end()) {
@@ -128,6 +131,21 @@ void SensorState::AddOdometry(const dds::PlanarOdometry& odom) {
   changed_.notify_all();
 }
 
+void SensorState::SetOdometryFrames(const std::string& frame_id,
+                                    const std::string& child_frame_id) {
+  std::lock_guard lock(mutex_);
+  // Compared first: the names rarely change, and assigning would copy them at the odometry rate.
+  if (odometry_frames_.frame_id != frame_id) odometry_frames_.frame_id = frame_id;
+  if (odometry_frames_.child_frame_id != child_frame_id) {
+    odometry_frames_.child_frame_id = child_frame_id;
+  }
+}
+
+SensorState::OdometryFrames SensorState::odometry_frames() const {
+  std::lock_guard lock(mutex_);
+  return odometry_frames_;
+}
+
 bool SensorState::has_odometry() const {
   std::lock_guard lock(mutex_);
   return !odometry_.empty();
@@ -144,9 +162,9 @@ std::optional<dds::PlanarOdometry> SensorState::OdometryAt(int64_t stamp_ns, int
     *reason = "no_odometry";
     return std::nullopt;
   }
-  const auto after = std::lower_bound(
-      odometry_.begin(), odometry_.end(), stamp_ns,
-      [](const dds::PlanarOdometry& o, int64_t t) { return o.stamp_ns < t; });
+  const auto after =
+      std::lower_bound(odometry_.begin(), odometry_.end(), stamp_ns,
+                       [](const dds::PlanarOdometry& o, int64_t t) { return o.stamp_ns < t; });
   dds::PlanarOdometry lo, hi;
   if (after == odometry_.end()) {
     lo = hi = odometry_.back();
@@ -161,10 +179,9 @@ std::optional<dds::PlanarOdometry> SensorState::OdometryAt(int64_t stamp_ns, int
     *reason = "odometry_too_far_from_image";
     return std::nullopt;
   }
-  const double w = hi.stamp_ns == lo.stamp_ns
-                       ? 0.0
-                       : static_cast<double>(stamp_ns - lo.stamp_ns) /
-                             static_cast<double>(hi.stamp_ns - lo.stamp_ns);
+  const double w = hi.stamp_ns == lo.stamp_ns ? 0.0
+                                              : static_cast<double>(stamp_ns - lo.stamp_ns) /
+                                                    static_cast<double>(hi.stamp_ns - lo.stamp_ns);
   const double dtheta = std::remainder(hi.theta - lo.theta, 2.0 * std::numbers::pi);
   return dds::PlanarOdometry{stamp_ns, (1 - w) * lo.x + w * hi.x, (1 - w) * lo.y + w * hi.y,
                              std::remainder(lo.theta + w * dtheta, 2.0 * std::numbers::pi)};

@@ -35,13 +35,20 @@ class SensorState {
   // Joint positions (by name, in `names` order) interpolated at stamp_ns. Waits up to `wait`
   // for a reading at or after the stamp. nullopt + *reason when none brackets the stamp
   // within max_gap_ns or a name is missing.
-  std::optional<std::vector<double>> JointsAt(int64_t stamp_ns, const std::vector<std::string>& names,
+  std::optional<std::vector<double>> JointsAt(int64_t stamp_ns,
+                                              const std::vector<std::string>& names,
                                               int64_t max_gap_ns, std::chrono::nanoseconds wait,
                                               std::string* reason);
   bool has_joints() const;
   std::vector<std::string> last_joint_names() const;
 
   void AddOdometry(const dds::PlanarOdometry& odom);
+  // The frames rt/odom names (header.frame_id, child_frame_id), as its newest message had them.
+  struct OdometryFrames {
+    std::string frame_id, child_frame_id;
+  };
+  void SetOdometryFrames(const std::string& frame_id, const std::string& child_frame_id);
+  OdometryFrames odometry_frames() const;
   std::optional<dds::PlanarOdometry> OdometryAt(int64_t stamp_ns, int64_t max_gap_ns,
                                                 std::chrono::nanoseconds wait, std::string* reason);
   bool has_odometry() const;
@@ -57,6 +64,7 @@ class SensorState {
   CameraInfos infos_;
   std::deque<dds::JointReading> joints_;
   std::deque<dds::PlanarOdometry> odometry_;
+  OdometryFrames odometry_frames_;
   bool interrupted_ = false;
 };
 

@@ -78,17 +78,36 @@ Pipeline::Pipeline(const ServiceConfig& config, BoundedQueue<StereoFrame>& queue
   SetUpPoseSource();
 }
 
+void Pipeline::WarnOnce(const std::string& event, const std::string& message) {
+  if (!warned_.insert(event).second) return;
+  spdlog::warn("{}", message);
+  events_.Increment(event);
+}
+
 void Pipeline::WarnOnceIfTheImagesAreNotInTheUrdfCameraFrame(const std::string& image_frame_id) {
-  if (warned_camera_frame_ || image_frame_id.empty() ||
-      image_frame_id == config_.left_camera_link) {
-    return;
+  if (image_frame_id.empty() || image_frame_id == config_.left_camera_link) return;
+  WarnOnce("camera_frame_not_urdf_link:" + image_frame_id,
+           fmt::format("the left images are in frame '{}' but the URDF's left camera link is "
+                       "'{}' (robot.left_camera_link): the disparity is published in '{}', the "
+                       "camera poses name '{}'",
+                       image_frame_id, config_.left_camera_link, image_frame_id,
+                       config_.left_camera_link));
+}
+
+void Pipeline::WarnOnceIfTheOdometryIsNotInTheConfiguredFrames() {
+  const auto frames = sensors_.odometry_frames();
+  if (!frames.frame_id.empty() && frames.frame_id != config_.maps.odom_frame) {
+    WarnOnce("odometry_frame_not_odom_frame:" + frames.frame_id,
+             fmt::format("rt/odom's poses are in frame '{}' but maps.odom_frame is '{}': the "
+                         "map -> '{}' transform on rt/tf does not join the robot's tf tree",
+                         frames.frame_id, config_.maps.odom_frame, config_.maps.odom_frame));
   }
-  warned_camera_frame_ = true;
-  spdlog::warn(
-      "the left images are in frame '{}' but the URDF's left camera link is '{}' "
-      "(robot.left_camera_link): the disparity is published in '{}', the camera poses name '{}'",
-      image_frame_id, config_.left_camera_link, image_frame_id, config_.left_camera_link);
-  events_.Increment("camera_frame_not_urdf_link:" + image_frame_id);
+  if (chain_ && !frames.child_frame_id.empty() && frames.child_frame_id != chain_->root_link()) {
+    WarnOnce("odometry_child_not_urdf_root:" + frames.child_frame_id,
+             fmt::format("rt/odom moves frame '{}' but the URDF's root link is '{}': the maps "
+                         "take the odometry's pose for the URDF's root",
+                         frames.child_frame_id, chain_->root_link()));
+  }
 }
 
 Pipeline::~Pipeline() {

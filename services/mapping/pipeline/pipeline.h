@@ -6,6 +6,8 @@
 #include <atomic>
 #include <memory>
 #include <optional>
+#include <set>
+#include <string>
 #include <thread>
 
 #include "perception/ep/expected_perception.h"
@@ -68,6 +70,11 @@ class Pipeline {
   // Says once (log and status event) when the left images name another camera frame than the
   // URDF's left camera link: tf consumers then see the disparity and the poses in two frames.
   void WarnOnceIfTheImagesAreNotInTheUrdfCameraFrame(const std::string& image_frame_id);
+  // The same for rt/odom (mobile base): its frame should be maps.odom_frame (the child of the
+  // map -> odom transform on rt/tf) and its child the URDF's root link.
+  void WarnOnceIfTheOdometryIsNotInTheConfiguredFrames();
+  // A warning logged, and counted as status event `event`, the first time only.
+  void WarnOnce(const std::string& event, const std::string& message);
   // The EP map of this frame into the snapshot (pipeline_ep.cc).
   void RunExpectedPerception(const StereoFrame& frame, const stereo::Rectifier& rectifier,
                              const cv::Mat& left, const cv::Mat& right,
@@ -89,8 +96,8 @@ class Pipeline {
   SnapshotStore& snapshots_;
 
   std::optional<kinematics::UrdfChain> chain_;
-  bool warned_camera_frame_ = false;
-  std::string pose_source_;  // as configured (auto resolves per frame)
+  std::set<std::string> warned_;  // WarnOnce's events so far (pipeline thread only)
+  std::string pose_source_;       // as configured (auto resolves per frame)
   std::optional<internal_model::LearnedPoseSource> learned_;
   std::vector<std::string> learned_inputs_;
   stereo::SgbmMatcher matcher_;  // full-frame SGBM when EP is disabled

@@ -59,6 +59,7 @@ void Pipeline::RunMaps(const StereoFrame& frame, const stereo::Rectifier& rectif
     counters_.key_frames_refused.Increment("maps:no_odometry");
     return;
   }
+  WarnOnceIfTheOdometryIsNotInTheConfiguredFrames();
 
   mobile_mapping::KeyFrame key_frame;
   key_frame.stamp_ns = frame.stamp_ns;

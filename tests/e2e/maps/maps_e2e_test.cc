@@ -408,9 +408,15 @@ class MobileBasePublisher {
     return ok;
   }
 
+  // The frames rt/odom names: by default those epmapd expects (maps.odom_frame, the URDF root).
+  void SetOdometryFrames(std::string frame_id, std::string child_frame_id) {
+    odom_frame_ = std::move(frame_id);
+    odom_child_ = std::move(child_frame_id);
+  }
+
   void Odometry(int64_t stamp, double x) {
     nav_msgs::msg::Odometry msg;
-    dds::ToOdometry({stamp, x, 0.0, 0.0}, "odom", "base_link", &msg);
+    dds::ToOdometry({stamp, x, 0.0, 0.0}, odom_frame_, odom_child_, &msg);
     odom_.Write(msg);
     Pace();
   }
@@ -463,6 +469,8 @@ class MobileBasePublisher {
     return c;
   }
   static void Pace() { std::this_thread::sleep_for(std::chrono::milliseconds(20)); }
+
+  std::string odom_frame_ = "odom", odom_child_ = "base_link";
 
   dds::Participant participant_;
   dds::Writer<sensor_msgs::msg::Image, sensor_msgs::msg::ImagePubSubType> left_, right_;
@@ -549,6 +557,10 @@ TEST_F(MapsFromPublishedFrames, BadInputIsCountedAndTheMapsStayIntact) {
   EXPECT_GE(count(status.rejected_by_reason(), "odometry:stamp_not_increasing"), 1u)
       << status.DebugString();
   EXPECT_EQ(count(status.events(), "maps_key_frame_without_edges"), 1u) << status.DebugString();
+  // The odometry's and the images' frames are those the service expects: no frame warning.
+  for (const auto& e : status.events()) {
+    EXPECT_EQ(e.reason().find("_not_"), std::string::npos) << e.reason();
+  }
   EXPECT_EQ(count(status.events(), "maps_key_frames"), static_cast<uint64_t>(good))
       << status.DebugString();
 
@@ -725,6 +737,26 @@ TEST_F(MapsFromPublishedFrames, APlannerWaitsForTheNextKeyFramesMaps) {
   EXPECT_GE(took_s, 0.4) << "it returned before the key frame was published";
   std::printf("waited %.2f s for the next key frame's maps (stamp %lld)\n", took_s,
               static_cast<long long>(pose.stamp_ns()));
+}
+
+// Odometry in frames the robot's tf tree does not share with the service (another odometry
+// frame than maps.odom_frame, another moving frame than the URDF's root): said once each in
+// the status, and the maps go on.
+TEST_F(MapsFromPublishedFrames, OdometryInOtherFramesIsSaidOnce) {
+  ASSERT_NO_FATAL_FAILURE(Start("maps-odom-frames", 63));
+  pub_->SetOdometryFrames("wheel_odom", "base_footprint");
+  for (int i = 0; i < 4; ++i) pub_->Frame(Stamp(i), 0.3 * i, 0.0, false);
+  const auto status = epmapd_->WaitStatus(
+      [](const v1::ServiceStatus& s) {
+        return testing::Epmapd::Count(s.events(), "maps_key_frames") >= 4;
+      },
+      std::chrono::seconds(30));
+  EXPECT_EQ(testing::Epmapd::Count(status.events(), "maps_key_frames"), 4u) << status.DebugString();
+  EXPECT_EQ(testing::Epmapd::Count(status.events(), "odometry_frame_not_odom_frame:wheel_odom"), 1u)
+      << status.DebugString();
+  EXPECT_EQ(testing::Epmapd::Count(status.events(), "odometry_child_not_urdf_root:base_footprint"),
+            1u)
+      << status.DebugString();
 }
 
 }  // namespace
