@@ -8,6 +8,7 @@
 #include <CLI/CLI.hpp>
 #include <iostream>
 
+#include "services/mapping/config/camera_chain.h"
 #include "services/mapping/config/service_config.h"
 #include "services/mapping/service.h"
 
@@ -19,6 +20,7 @@ int main(int argc, char** argv) {
   int64_t domain = -1;
   int num_disparities = 0;
   bool print_config = false;
+  bool check_robot = false;
   app.add_option("--config", config_path, "YAML config (deploy/epmapd.yaml documents every key)")
       ->check(CLI::ExistingFile);
   app.add_option("--listen", listen, "gRPC address host:port (overrides api.listen)");
@@ -30,6 +32,9 @@ int main(int argc, char** argv) {
   app.add_option("--state-dir", state_dir, "durable state folder (overrides state.dir)");
   app.add_option("--log-level", log_level, "trace | debug | info | warn | error");
   app.add_flag("--print-config", print_config, "print the effective configuration and exit");
+  app.add_flag("--check-robot", check_robot,
+               "load the URDF with the configured camera links, print the chain (root, cameras, "
+               "joints and limits, poses at zero joints) and exit: 0 if it loads, 1 if not");
   CLI11_PARSE(app, argc, argv);
 
   ServiceConfig config;
@@ -50,6 +55,15 @@ int main(int argc, char** argv) {
   }
   if (print_config) {
     std::cout << epmap::mapping::ToYaml(config);
+    return 0;
+  }
+  if (check_robot) {
+    try {
+      std::cout << epmap::mapping::DescribeCameraChain(config);
+    } catch (const std::exception& e) {
+      std::cerr << "epmapd: " << e.what() << "\n";
+      return 1;
+    }
     return 0;
   }
   spdlog::set_level(spdlog::level::from_str(config.log_level));

@@ -11,4 +11,9 @@ namespace epmap::mapping {
 // Throws std::runtime_error with the URDF's complaint and the settings that name the links.
 kinematics::UrdfChain LoadCameraChain(const ServiceConfig& config);
 
+// What `epmapd --check-robot` prints: the chain's root and camera links, the joints the service
+// will read from rt/joint_states with their limits, and the cameras' poses at zero joints, so a
+// robot's URDF and config can be checked before the service runs. Throws like LoadCameraChain.
+std::string DescribeCameraChain(const ServiceConfig& config);
+
 }  // namespace epmap::mapping

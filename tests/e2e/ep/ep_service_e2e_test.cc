@@ -333,7 +333,26 @@ TEST_F(EpServiceE2E, ARobotsOwnUrdfLinkNamesComeFromTheConfig) {
   std::ofstream(config) << "robot:\n  left_camera_link: left_camera_optical_frame\n"
                            "  right_camera_link: right_camera_optical_frame\n"
                            "ep:\n  pose_source: urdf\n";
-  const uint32_t domain = testing::UniqueDomainId(45);
+  // Checked before the service runs: `epmapd --check-robot` prints the chain it will use, and
+  // without the link settings says which optical links the URDF has.
+  const auto check = [&](std::vector<std::string> args) {
+    args.insert(args.begin(), "--check-robot");
+    return testing::RunToCompletion(testing::BinDir() / "epmapd", args, work / "check.log",
+                                    seconds(30));
+  };
+  const auto [check_code, check_out] =
+      check({"--config", config.string(), "--urdf", robot_urdf.string()});
+  EXPECT_EQ(check_code, 0) << check_out;
+  EXPECT_NE(check_out.find("root link (the base): base_footprint"), std::string::npos) << check_out;
+  EXPECT_NE(check_out.find("left camera link: left_camera_optical_frame"), std::string::npos)
+      << check_out;
+  EXPECT_NE(check_out.find("baseline at zero joints: 0.0680 m"), std::string::npos) << check_out;
+  const auto [unset_code, unset_out] = check({"--urdf", robot_urdf.string()});
+  EXPECT_EQ(unset_code, 1) << unset_out;
+  EXPECT_NE(unset_out.find("right_camera_optical_frame"), std::string::npos) << unset_out;
+  EXPECT_NE(unset_out.find("robot.left_camera_link"), std::string::npos) << unset_out;
+
+  const uint32_t domain = testing::UniqueDomainId(46);
   testing::Epmapd epmapd(domain, {"--config", config.string(), "--urdf", robot_urdf.string()},
                          work);
   ASSERT_TRUE(epmapd.WaitReady()) << epmapd.process().Output();
