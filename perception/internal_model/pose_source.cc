@@ -78,4 +78,12 @@ Eigen::Isometry3d BaseOnOdometry(double x, double y, double theta) {
   return T;
 }
 
+Eigen::Isometry3d RootOnOdometry(const Eigen::Isometry3d& T_odom_child,
+                                 const Eigen::Isometry3d& T_root_child) {
+  const Eigen::Isometry3d T_odom_root = T_odom_child * T_root_child.inverse();
+  const Eigen::Vector3d x_axis = T_odom_root.linear().col(0);
+  return BaseOnOdometry(T_odom_root.translation().x(), T_odom_root.translation().y(),
+                        std::atan2(x_axis.y(), x_axis.x()));
+}
+
 }  // namespace epmap::internal_model

@@ -86,6 +86,13 @@ class FixedPoseSource final : public PoseSource {
 // base's pose in the odometry frame: the camera rides on it, T_odom_cam0 = T_odom_base T_base_cam0.
 Eigen::Isometry3d BaseOnOdometry(double x, double y, double theta);
 
+// The URDF root's pose on the floor when odometry moves another link of the robot (e.g. rt/odom
+// of base_link, a URDF rooted at base_footprint): T_odom_root = T_odom_child T_root_child^-1,
+// flattened to the plane (its x, y and the heading of its x axis) because the maps and the base
+// pose are planar.
+Eigen::Isometry3d RootOnOdometry(const Eigen::Isometry3d& T_odom_child,
+                                 const Eigen::Isometry3d& T_root_child);
+
 // Throws std::invalid_argument (prefixed by `what`) unless T is finite with an orthonormal,
 // right-handed rotation (tolerance 1e-6).
 void CheckRigid(const Eigen::Isometry3d& T, const std::string& what);

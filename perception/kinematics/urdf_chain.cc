@@ -206,6 +206,10 @@ Eigen::Isometry3d UrdfChain::Cam1Pose(const std::vector<double>& joints) const {
   return impl_->Pose(impl_->links.right, joints);
 }
 
+bool UrdfChain::HasLink(const std::string& link) const {
+  return impl_->tree.getSegments().count(link) > 0;
+}
+
 Eigen::Isometry3d UrdfChain::LinkPose(const std::string& link,
                                       const std::vector<double>& joints) const {
   return impl_->Pose(link, joints);

@@ -48,7 +48,10 @@ class UrdfChain {
   // count or NaN.
   Eigen::Isometry3d Cam0Pose(const std::vector<double>& joints) const;
   Eigen::Isometry3d Cam1Pose(const std::vector<double>& joints) const;
-  // Pose of any link of the tree.
+  // Whether the URDF has a link of that name.
+  bool HasLink(const std::string& link) const;
+  // Pose of any link of the tree. Throws std::invalid_argument if the link is missing or a
+  // movable joint on the way to it is not on a camera chain (its value is not read).
   Eigen::Isometry3d LinkPose(const std::string& link, const std::vector<double>& joints) const;
 
  private:

@@ -84,6 +84,12 @@ void Pipeline::WarnOnce(const std::string& event, const std::string& message) {
   events_.Increment(event);
 }
 
+void Pipeline::NoteOnce(const std::string& event, const std::string& message) {
+  if (!warned_.insert(event).second) return;
+  spdlog::info("{}", message);
+  events_.Increment(event);
+}
+
 void Pipeline::WarnOnceIfTheImagesAreNotInTheUrdfCameraFrame(const std::string& image_frame_id) {
   if (image_frame_id.empty() || image_frame_id == config_.left_camera_link) return;
   WarnOnce("camera_frame_not_urdf_link:" + image_frame_id,
@@ -102,11 +108,37 @@ void Pipeline::WarnOnceIfTheOdometryIsNotInTheConfiguredFrames() {
                          "map -> '{}' transform on rt/tf does not join the robot's tf tree",
                          frames.frame_id, config_.maps.odom_frame, config_.maps.odom_frame));
   }
-  if (chain_ && !frames.child_frame_id.empty() && frames.child_frame_id != chain_->root_link()) {
+  if (chain_ && !frames.child_frame_id.empty() && !chain_->HasLink(frames.child_frame_id)) {
     WarnOnce("odometry_child_not_urdf_root:" + frames.child_frame_id,
-             fmt::format("rt/odom moves frame '{}' but the URDF's root link is '{}': the maps "
-                         "take the odometry's pose for the URDF's root",
+             fmt::format("rt/odom moves frame '{}', which the URDF does not have (its root link "
+                         "is '{}'): the maps take the odometry's pose for the URDF's root",
                          frames.child_frame_id, chain_->root_link()));
+  }
+}
+
+Eigen::Isometry3d Pipeline::UrdfRootOnOdometry(const dds::PlanarOdometry& odom,
+                                               const std::vector<double>& joints) {
+  const Eigen::Isometry3d T_odom_child = internal_model::BaseOnOdometry(odom.x, odom.y, odom.theta);
+  const std::string child = sensors_.odometry_frames().child_frame_id;
+  if (!chain_ || child.empty() || child == chain_->root_link() || !chain_->HasLink(child)) {
+    return T_odom_child;
+  }
+  try {
+    const Eigen::Isometry3d T_root_child = chain_->LinkPose(child, joints);
+    NoteOnce("odometry_child_composed:" + child,
+             fmt::format("rt/odom moves frame '{}', a link of the URDF below its root '{}': the "
+                         "root's pose is composed through the URDF ({:.3f}, {:.3f}, {:.3f}) m from "
+                         "it at the current joints",
+                         child, chain_->root_link(), T_root_child.translation().x(),
+                         T_root_child.translation().y(), T_root_child.translation().z()));
+    return internal_model::RootOnOdometry(T_odom_child, T_root_child);
+  } catch (const std::invalid_argument& e) {
+    // A link behind a movable joint the service does not read (e.g. a wheel): its pose is unknown.
+    WarnOnce("odometry_child_not_urdf_root:" + child,
+             fmt::format("rt/odom moves frame '{}', which cannot be placed under the URDF's root "
+                         "'{}' ({}): the maps take the odometry's pose for the URDF's root",
+                         child, chain_->root_link(), e.what()));
+    return T_odom_child;
   }
 }
 

@@ -71,10 +71,18 @@ class Pipeline {
   // URDF's left camera link: tf consumers then see the disparity and the poses in two frames.
   void WarnOnceIfTheImagesAreNotInTheUrdfCameraFrame(const std::string& image_frame_id);
   // The same for rt/odom (mobile base): its frame should be maps.odom_frame (the child of the
-  // map -> odom transform on rt/tf) and its child the URDF's root link.
+  // map -> odom transform on rt/tf) and its child a link of the URDF.
   void WarnOnceIfTheOdometryIsNotInTheConfiguredFrames();
+  // The URDF root's planar pose in the odometry frame from an rt/odom reading: the reading
+  // itself when rt/odom moves the root (or a frame the URDF does not have: warned once), composed
+  // through the URDF when it moves another of its links (e.g. base_link under base_footprint).
+  // `joints` in chain_->joint_names() order.
+  Eigen::Isometry3d UrdfRootOnOdometry(const dds::PlanarOdometry& odom,
+                                       const std::vector<double>& joints);
   // A warning logged, and counted as status event `event`, the first time only.
   void WarnOnce(const std::string& event, const std::string& message);
+  // The same at info level, for what is handled but worth one line in the log.
+  void NoteOnce(const std::string& event, const std::string& message);
   // The EP map of this frame into the snapshot (pipeline_ep.cc).
   void RunExpectedPerception(const StereoFrame& frame, const stereo::Rectifier& rectifier,
                              const cv::Mat& left, const cv::Mat& right,

@@ -77,10 +77,10 @@ std::optional<FramePose> Pipeline::PoseAt(int64_t stamp_ns, std::string* reason)
   FramePose pose;
   pose.T_base_cam0 = chain_->Cam0Pose(*joints);
   if (source == "urdf") return pose;
-  // odometry: the base's planar pose in the odometry frame, then the chain.
+  // odometry: the base's (the URDF root's) planar pose in the odometry frame, then the chain.
   const auto odom = sensors_.OdometryAt(stamp_ns, config_.joints_max_gap_ns, wait, reason);
   if (!odom) return std::nullopt;
-  pose.T_odom_base = internal_model::BaseOnOdometry(odom->x, odom->y, odom->theta);
+  pose.T_odom_base = UrdfRootOnOdometry(*odom, *joints);
   return pose;
 }
 

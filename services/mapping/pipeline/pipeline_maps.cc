@@ -65,7 +65,11 @@ void Pipeline::RunMaps(const StereoFrame& frame, const stereo::Rectifier& rectif
   key_frame.stamp_ns = frame.stamp_ns;
   key_frame.left = left;
   key_frame.right = right;
-  key_frame.T_odom_base = Eigen::Translation2d(odom->x, odom->y) * Eigen::Rotation2Dd(odom->theta);
+  {
+    const Eigen::Isometry3d T = UrdfRootOnOdometry(*odom, joints);
+    key_frame.T_odom_base = Eigen::Translation2d(T.translation().x(), T.translation().y()) *
+                            Eigen::Rotation2Dd(std::atan2(T.linear()(1, 0), T.linear()(0, 0)));
+  }
   key_frame.T_base_cam = chain_->Cam0Pose(joints) * RawToRectified(rectifier);
   key_frame.joint_positions = joints;
   // What the EP found moving on its own in this very frame stays out of the maps, grown by a

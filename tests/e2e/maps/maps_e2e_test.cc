@@ -17,6 +17,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <functional>
 #include <future>
 #include <limits>
 #include <memory>
@@ -484,7 +485,9 @@ class MobileBasePublisher {
 // fed frame by frame by a MobileBasePublisher.
 class MapsFromPublishedFrames : public ::testing::Test {
  protected:
-  void Start(const std::string& name, uint32_t domain_salt) {
+  // `edit_urdf`, if given, changes the recorded robot's URDF before epmapd loads it.
+  void Start(const std::string& name, uint32_t domain_salt,
+             const std::function<std::string(std::string)>& edit_urdf = {}) {
     work_ = testing::FreshTempDir(name);
     const auto& work = work_;
     const uint32_t domain = testing::UniqueDomainId(domain_salt);
@@ -494,9 +497,14 @@ class MapsFromPublishedFrames : public ::testing::Test {
         {"record", "--scenario", "building", "--frames", "2", "--out", rec.string()},
         work / "record.log", std::chrono::seconds(60));
     ASSERT_EQ(rec_code, 0) << rec_out;
+    auto urdf = rec / "mav0" / "kinematics.urdf";
+    if (edit_urdf) {
+      const auto edited = work / "robot.urdf";
+      std::ofstream(edited) << edit_urdf(ReadText(urdf));
+      urdf = edited;
+    }
     epmapd_ = std::make_unique<testing::Epmapd>(
-        domain, std::vector<std::string>{"--urdf", (rec / "mav0" / "kinematics.urdf").string()},
-        work);
+        domain, std::vector<std::string>{"--urdf", urdf.string()}, work);
     ASSERT_TRUE(epmapd_->WaitReady()) << epmapd_->process().Output();
     pub_ = std::make_unique<MobileBasePublisher>(domain);
     ASSERT_TRUE(pub_->WaitMatched());
@@ -757,6 +765,43 @@ TEST_F(MapsFromPublishedFrames, OdometryInOtherFramesIsSaidOnce) {
   EXPECT_EQ(testing::Epmapd::Count(status.events(), "odometry_child_not_urdf_root:base_footprint"),
             1u)
       << status.DebugString();
+}
+
+// A robot whose URDF is rooted at base_footprint, with base_link 0.25 m ahead of it, and whose
+// rt/odom moves base_link (as many ROS 2 bases do): the maps take the root's pose composed
+// through the URDF, said once at info level, and the served odometry pose is the root's.
+TEST_F(MapsFromPublishedFrames, OdometryOfALinkBelowTheUrdfRootIsComposedThroughIt) {
+  ASSERT_NO_FATAL_FAILURE(Start("maps-odom-child", 64, [](std::string urdf) {
+    const std::string root = "<link name=\"base_link\"/>";
+    const size_t at = urdf.find(root);
+    EXPECT_NE(at, std::string::npos);
+    urdf.insert(at, R"(<link name="base_footprint"/>
+  <joint name="base_footprint_joint" type="fixed">
+    <parent link="base_footprint"/><child link="base_link"/>
+    <origin xyz="0.25 0 0" rpy="0 0 0"/>
+  </joint>
+  )");
+    return urdf;
+  }));
+  pub_->SetOdometryFrames("odom", "base_link");
+  for (int i = 0; i < 4; ++i) pub_->Frame(Stamp(i), 0.3 * i, 0.0, false);
+  const auto status = epmapd_->WaitStatus(
+      [](const v1::ServiceStatus& s) {
+        return testing::Epmapd::Count(s.events(), "maps_key_frames") >= 4;
+      },
+      std::chrono::seconds(30));
+  EXPECT_EQ(testing::Epmapd::Count(status.events(), "maps_key_frames"), 4u) << status.DebugString();
+  EXPECT_EQ(testing::Epmapd::Count(status.events(), "odometry_child_composed:base_link"), 1u)
+      << status.DebugString();
+  EXPECT_EQ(testing::Epmapd::Count(status.events(), "odometry_child_not_urdf_root:base_link"), 0u)
+      << status.DebugString();
+  // The last reading put base_link at x = 0.9 m: the root is 0.25 m behind it.
+  const auto [code, out] = Ctl(*epmapd_, work_, {"pose", "--json"});
+  ASSERT_EQ(code, 0) << out;
+  const YAML::Node pose = YAML::Load(out);
+  EXPECT_NEAR(pose["odometry"]["x"].as<double>(), 0.9 - 0.25, 1e-6) << out;
+  EXPECT_NEAR(pose["odometry"]["y"].as<double>(), 0.0, 1e-6) << out;
+  EXPECT_NEAR(pose["odometry"]["theta"].as<double>(), 0.0, 1e-6) << out;
 }
 
 }  // namespace

@@ -90,6 +90,27 @@ TEST(PoseSources, TheBaseOnOdometryTurnsAboutTheVerticalAxis) {
   EXPECT_TRUE((T * Eigen::Vector3d(1, 0, 0.5)).isApprox(Eigen::Vector3d(2, 2, 0.5)));
 }
 
+TEST(PoseSources, TheRootOnOdometryOfAnotherLink) {
+  // rt/odom moves base_link, 0.3 m ahead of and 0.1 m above the URDF's root (base_footprint),
+  // turned 0.2 rad; the odometry says base_link is at (2, 1) facing +y.
+  Eigen::Isometry3d T_root_child = Eigen::Isometry3d::Identity();
+  T_root_child.translation() = Eigen::Vector3d(0.3, 0.0, 0.1);
+  T_root_child.linear() = Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  const Eigen::Isometry3d T_odom_child =
+      internal_model::BaseOnOdometry(2.0, 1.0, std::numbers::pi / 2);
+  const Eigen::Isometry3d T_odom_root = internal_model::RootOnOdometry(T_odom_child, T_root_child);
+  // The root faces 0.2 rad less than the child and stays on the floor (z = 0, planar).
+  EXPECT_NEAR(T_odom_root.translation().z(), 0.0, 1e-12);
+  EXPECT_NEAR(Eigen::AngleAxisd(T_odom_root.linear()).angle(), std::numbers::pi / 2 - 0.2, 1e-12);
+  // Composed back, the child lands where the odometry put it (in x, y).
+  const Eigen::Isometry3d back = T_odom_root * T_root_child;
+  EXPECT_TRUE(back.translation().head<2>().isApprox(Eigen::Vector2d(2.0, 1.0), 1e-12));
+  EXPECT_TRUE(back.linear().isApprox(T_odom_child.linear(), 1e-12));
+  // The identity leaves the reading as it is.
+  EXPECT_TRUE(internal_model::RootOnOdometry(T_odom_child, Eigen::Isometry3d::Identity())
+                  .isApprox(T_odom_child, 1e-12));
+}
+
 // Sec. III: 3 neck inputs, 10 hidden units, 12 outputs, 70/15/15, 300 samples, trained until the
 // validation error is below the paper's 6e-6.
 TEST(LearnedPoseModel, LearnsTheNeckChainAndRoundTripsThroughAFile) {

@@ -91,5 +91,28 @@ TEST(UrdfChain, ARobotsOwnCameraLinkNames) {
   }
 }
 
+TEST(UrdfChain, LinksBelowTheRootAndTheirPoses) {
+  // rt/odom may move another link than the root: the pipeline asks whether the URDF has it and
+  // where it is; a link behind a joint no camera chain reads has no known pose.
+  std::string urdf = kTwoJointUrdf;
+  urdf.replace(urdf.find("</robot>"), 8, R"(
+  <link name="wheel"/>
+  <joint name="wheel_joint" type="continuous">
+    <parent link="base"/><child link="wheel"/>
+    <origin xyz="0 0.2 0.05" rpy="0 0 0"/><axis xyz="0 1 0"/>
+  </joint>
+</robot>)");
+  const auto chain = kinematics::UrdfChain::FromString(urdf);
+  EXPECT_TRUE(chain.HasLink("base"));
+  EXPECT_TRUE(chain.HasLink("tilt_link"));
+  EXPECT_TRUE(chain.HasLink("wheel"));
+  EXPECT_FALSE(chain.HasLink("base_footprint"));
+  const Eigen::Isometry3d T_base_pan = chain.LinkPose("pan_link", {0.4, 0.0});
+  EXPECT_TRUE(T_base_pan.translation().isApprox(Eigen::Vector3d(0, 0, 0.5)));
+  EXPECT_NEAR(Eigen::AngleAxisd(T_base_pan.linear()).angle(), 0.4, 1e-12);
+  EXPECT_THROW(chain.LinkPose("wheel", {0.0, 0.0}), std::invalid_argument);
+  EXPECT_THROW(chain.LinkPose("base_footprint", {0.0, 0.0}), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace epmap
