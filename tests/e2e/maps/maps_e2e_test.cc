@@ -509,6 +509,14 @@ class MapsFromPublishedFrames : public ::testing::Test {
     pub_ = std::make_unique<MobileBasePublisher>(domain);
     ASSERT_TRUE(pub_->WaitMatched());
   }
+  // The status once the maps have taken at least n key frames (or after 30 s).
+  v1::ServiceStatus WaitForKeyFrames(uint64_t n) {
+    return epmapd_->WaitStatus(
+        [n](const v1::ServiceStatus& s) {
+          return testing::Epmapd::Count(s.events(), "maps_key_frames") >= n;
+        },
+        std::chrono::seconds(30));
+  }
   // Frame i's stamp: 5 frames a second.
   static int64_t Stamp(int i) { return 1'700'000'000'000'000'000 + i * 200'000'000LL; }
   // The service stops first (it writes into the folder); the folder stays when a check failed.
@@ -633,13 +641,7 @@ TEST_F(MapsFromPublishedFrames, AStopUnderWayIsServedBeforeTheBaseMovesOn) {
   auto& epmapd = *epmapd_;
   auto& pub = *pub_;
   const auto stamp = &Stamp;
-  const auto key_frames = [&](uint64_t n) {
-    return epmapd.WaitStatus(
-        [&](const v1::ServiceStatus& s) {
-          return testing::Epmapd::Count(s.events(), "maps_key_frames") >= n;
-        },
-        std::chrono::seconds(30));
-  };
+  const auto key_frames = [this](uint64_t n) { return WaitForKeyFrames(n); };
   // Standing at x = 0, the head pans: four key frames at one stop.
   const double pans[] = {0.0, 0.3, 0.6, 0.9};
   for (int i = 0; i < 4; ++i) pub.Frame(stamp(i), 0.0, pans[i], false);
@@ -684,11 +686,7 @@ TEST_F(MapsFromPublishedFrames, APlannerWaitsForTheNextKeyFramesMaps) {
   auto& pub = *pub_;
   const auto stamp = &Stamp;
   for (int i = 0; i < 3; ++i) pub.Frame(stamp(i), 0.3 * i, 0.0, false);  // a key frame each
-  epmapd.WaitStatus(
-      [&](const v1::ServiceStatus& s) {
-        return testing::Epmapd::Count(s.events(), "maps_key_frames") >= 3;
-      },
-      std::chrono::seconds(30));
+  WaitForKeyFrames(3);
   const auto get_pose = [&](int64_t newer_than_ns, uint32_t wait_ms, v1::PoseEstimate* pose) {
     grpc::ClientContext context;
     v1::GetPoseRequest request;
@@ -751,14 +749,10 @@ TEST_F(MapsFromPublishedFrames, APlannerWaitsForTheNextKeyFramesMaps) {
 // frame than maps.odom_frame, another moving frame than the URDF's root): said once each in
 // the status, and the maps go on.
 TEST_F(MapsFromPublishedFrames, OdometryInOtherFramesIsSaidOnce) {
-  ASSERT_NO_FATAL_FAILURE(Start("maps-odom-frames", 63));
+  ASSERT_NO_FATAL_FAILURE(Start("maps-odom-frames", 65));
   pub_->SetOdometryFrames("wheel_odom", "base_footprint");
   for (int i = 0; i < 4; ++i) pub_->Frame(Stamp(i), 0.3 * i, 0.0, false);
-  const auto status = epmapd_->WaitStatus(
-      [](const v1::ServiceStatus& s) {
-        return testing::Epmapd::Count(s.events(), "maps_key_frames") >= 4;
-      },
-      std::chrono::seconds(30));
+  const auto status = WaitForKeyFrames(4);
   EXPECT_EQ(testing::Epmapd::Count(status.events(), "maps_key_frames"), 4u) << status.DebugString();
   EXPECT_EQ(testing::Epmapd::Count(status.events(), "odometry_frame_not_odom_frame:wheel_odom"), 1u)
       << status.DebugString();
@@ -771,7 +765,7 @@ TEST_F(MapsFromPublishedFrames, OdometryInOtherFramesIsSaidOnce) {
 // rt/odom moves base_link (as many ROS 2 bases do): the maps take the root's pose composed
 // through the URDF, said once at info level, and the served odometry pose is the root's.
 TEST_F(MapsFromPublishedFrames, OdometryOfALinkBelowTheUrdfRootIsComposedThroughIt) {
-  ASSERT_NO_FATAL_FAILURE(Start("maps-odom-child", 64, [](std::string urdf) {
+  ASSERT_NO_FATAL_FAILURE(Start("maps-odom-child", 66, [](std::string urdf) {
     const std::string root = "<link name=\"base_link\"/>";
     const size_t at = urdf.find(root);
     EXPECT_NE(at, std::string::npos);
@@ -785,11 +779,7 @@ TEST_F(MapsFromPublishedFrames, OdometryOfALinkBelowTheUrdfRootIsComposedThrough
   }));
   pub_->SetOdometryFrames("odom", "base_link");
   for (int i = 0; i < 4; ++i) pub_->Frame(Stamp(i), 0.3 * i, 0.0, false);
-  const auto status = epmapd_->WaitStatus(
-      [](const v1::ServiceStatus& s) {
-        return testing::Epmapd::Count(s.events(), "maps_key_frames") >= 4;
-      },
-      std::chrono::seconds(30));
+  const auto status = WaitForKeyFrames(4);
   EXPECT_EQ(testing::Epmapd::Count(status.events(), "maps_key_frames"), 4u) << status.DebugString();
   EXPECT_EQ(testing::Epmapd::Count(status.events(), "odometry_child_composed:base_link"), 1u)
       << status.DebugString();
