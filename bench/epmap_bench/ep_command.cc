@@ -38,6 +38,7 @@
 #include <random>
 #include <sstream>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "bench/epmap_bench/command_registry.h"
@@ -114,15 +115,7 @@ Rig MakeRig(const Dataset& d) {
   epmap::stereo::CameraParameters left, right;
   Rig rig;
   if (d.rectified()) {
-    const double b = d.baseline_m();
-    for (auto* c : {&left, &right}) {
-      c->width = c0.width;
-      c->height = c0.height;
-      c->d.assign(5, 0.0);
-      for (int i = 0; i < 9; ++i) c->k[static_cast<size_t>(i)] = k0.val[i];
-      c->p = {c0.fu, 0, c0.cu, 0, 0, c0.fv, c0.cv, 0, 0, 0, 1, 0};
-    }
-    right.p[3] = -c0.fu * b;
+    std::tie(left, right) = epmap::camera::RectifiedPinholePair(c0.pinhole(), d.baseline_m());
   } else {
     cv::Matx44d tl, tr;
     for (int i = 0; i < 16; ++i) {

@@ -32,19 +32,6 @@ void Log(const PublishOptions& o, const std::string& message) {
   if (o.log) o.log(message);
 }
 
-// CameraInfo of a calibrated driver (REP 104): K, D = 0, R = I, P = K [I | t] with
-// P[3] = -fx * B for the right camera of a rectified pair; an unrectified rig has P = K [I | 0].
-dds::CameraCalibration Calibration(const dataset::CameraSensor& cam, double tx) {
-  dds::CameraCalibration c;
-  c.width = cam.width;
-  c.height = cam.height;
-  c.distortion_model = "plumb_bob";
-  c.d = {0, 0, 0, 0, 0};
-  c.k = {cam.fu, 0, cam.cu, 0, cam.fv, cam.cv, 0, 0, 1};
-  c.p = {cam.fu, 0, cam.cu, tx, 0, cam.fv, cam.cv, 0, 0, 0, 1, 0};
-  return c;
-}
-
 // Frames rendered ahead by a few worker threads, handed to the sender in index order. A worker
 // waits while it is more than `ahead` frames in front of the sender.
 class RenderAhead {
@@ -214,8 +201,10 @@ PublishReport Publish(const Scenario& scenario, const PublishOptions& o) {
 
   const dataset::CameraSensor cam0 = scenario.cam0(), cam1 = scenario.cam1();
   const double baseline = scenario.rectified() ? (cam0.T_BS.inverse() * cam1.T_BS)(0, 3) : 0.0;
-  const dds::CameraCalibration calib0 = Calibration(cam0, 0.0);
-  const dds::CameraCalibration calib1 = Calibration(cam1, -cam1.fu * baseline);
+  // CameraInfo of a calibrated driver (REP 104): a rectified pair's right camera has
+  // P[3] = -fx * B; an unrectified rig (baseline 0 here) has P = K [I | 0].
+  const dds::CameraCalibration calib0 = camera::Pinhole(cam0.pinhole());
+  const dds::CameraCalibration calib1 = camera::Pinhole(cam1.pinhole(), baseline);
   const std::vector<std::string> names = scenario.joint_names();
   const double rate = o.rate_hz > 0 ? o.rate_hz : scenario.rate_hz();
   const int64_t scenario0 = scenario.StampNs(0);

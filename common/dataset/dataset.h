@@ -14,6 +14,8 @@
 
 #include <opencv2/core.hpp>
 
+#include "common/camera/camera_model.h"
+
 namespace epmap::dataset {
 
 // One camera as described by an EuRoC sensor.yaml.
@@ -25,6 +27,9 @@ struct CameraSensor {
   std::vector<double> distortion;                      // k1 k2 p1 p2 (or k1..k4)
   Eigen::Matrix4d T_BS = Eigen::Matrix4d::Identity();  // camera pose in the body frame
   double rate_hz = 0;
+
+  // Size and pinhole intrinsics, without the distortion.
+  camera::PinholeIntrinsics pinhole() const { return {width, height, fu, fv, cu, cv}; }
 };
 
 // The description of a rectified (distortion-free) pinhole camera at T_base_cam, as the

@@ -15,6 +15,8 @@
 #include <string>
 #include <vector>
 
+#include "common/camera/camera_model.h"
+
 namespace epmap::dds {
 
 int64_t ToNanoseconds(const builtin_interfaces::msg::Time& t);
@@ -30,18 +32,7 @@ void MatToImage(const cv::Mat& image, int64_t stamp_ns, const std::string& frame
                 sensor_msgs::msg::Image* msg);
 
 // A camera's calibration as a calibrated ROS driver publishes it in CameraInfo.
-struct CameraCalibration {
-  int width = 0;
-  int height = 0;
-  std::string distortion_model = "plumb_bob";
-  std::vector<double> d;                               // distortion coefficients
-  std::array<double, 9> k{};                           // intrinsics, row-major
-  std::array<double, 9> r{1, 0, 0, 0, 1, 0, 0, 0, 1};  // rectifying rotation
-  std::array<double, 12> p{};                          // projection of the rectified camera
-
-  // Baseline (metres) of a right camera from P: P[3] = -fx' * B (REP 104).
-  double baseline_from_p() const { return p[0] != 0.0 ? -p[3] / p[0] : 0.0; }
-};
+using CameraCalibration = camera::CameraModel;
 
 // CameraInfo -> CameraCalibration; nullopt with *reason ("camera_info_invalid") when the
 // sizes are zero, K is singular or values are not finite.

@@ -8,18 +8,12 @@
 #include <string>
 #include <vector>
 
+#include "common/camera/camera_model.h"
+
 namespace epmap::stereo {
 
 // One camera's calibration in ROS CameraInfo terms.
-struct CameraParameters {
-  int width = 0;
-  int height = 0;
-  std::string distortion_model = "plumb_bob";  // or "equidistant"
-  std::vector<double> d;
-  std::array<double, 9> k{};
-  std::array<double, 9> r{1, 0, 0, 0, 1, 0, 0, 0, 1};
-  std::array<double, 12> p{};
-};
+using CameraParameters = camera::CameraModel;
 
 // The pinhole model of the rectified left camera and the stereo baseline.
 struct RectifiedGeometry {

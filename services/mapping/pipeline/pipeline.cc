@@ -18,30 +18,10 @@ double MsSince(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
 
-stereo::CameraParameters ToParameters(const dds::CameraCalibration& c) {
-  stereo::CameraParameters p;
-  p.width = c.width;
-  p.height = c.height;
-  p.distortion_model = c.distortion_model;
-  p.d = c.d;
-  p.k = c.k;
-  p.r = c.r;
-  p.p = c.p;
-  return p;
-}
-
 // The configured camera describes an already-rectified pair.
 std::pair<stereo::CameraParameters, stereo::CameraParameters> FromConfig(
     const ConfiguredCamera& c) {
-  stereo::CameraParameters left;
-  left.width = c.width;
-  left.height = c.height;
-  left.d = {0, 0, 0, 0, 0};
-  left.k = {c.fx, 0, c.cx, 0, c.fy, c.cy, 0, 0, 1};
-  left.p = {c.fx, 0, c.cx, 0, 0, c.fy, c.cy, 0, 0, 0, 1, 0};
-  stereo::CameraParameters right = left;
-  right.p[3] = -c.fx * c.baseline_m;
-  return {left, right};
+  return camera::RectifiedPinholePair({c.width, c.height, c.fx, c.fy, c.cx, c.cy}, c.baseline_m);
 }
 
 double ValidShare(const cv::Mat& disparity) {
@@ -203,7 +183,7 @@ const stereo::Rectifier* Pipeline::CurrentRectifier(const StereoFrame& frame) {
     }
     if (infos.version != rectifier_version_) {
       try {
-        rectifier_.emplace(ToParameters(*infos.left), ToParameters(*infos.right));
+        rectifier_.emplace(*infos.left, *infos.right);
         rectifier_version_ = infos.version;
         spdlog::info("rectification from CameraInfo: {}x{}, fx {:.2f}, baseline {:.4f} m",
                      rectifier_->geometry().width, rectifier_->geometry().height,

@@ -461,13 +461,7 @@ class MobileBasePublisher {
   static constexpr int kWidth = 160, kHeight = 120;
   static constexpr double kBaseline = 0.1;
   static dds::CameraCalibration Camera(double baseline) {
-    dds::CameraCalibration c;
-    c.width = kWidth;
-    c.height = kHeight;
-    c.d = {0, 0, 0, 0, 0};
-    c.k = {100, 0, kWidth / 2.0, 0, 100, kHeight / 2.0, 0, 0, 1};
-    c.p = {100, 0, kWidth / 2.0, -100 * baseline, 0, 100, kHeight / 2.0, 0, 0, 0, 1, 0};
-    return c;
+    return camera::Pinhole({kWidth, kHeight, 100, 100, kWidth / 2.0, kHeight / 2.0}, baseline);
   }
   static void Pace() { std::this_thread::sleep_for(std::chrono::milliseconds(20)); }
 

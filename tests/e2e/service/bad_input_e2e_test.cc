@@ -68,13 +68,7 @@ cv::Mat TexturedImage(int w, int h, int seed) {
 }
 
 dds::CameraCalibration Rectified(int w, int h, double baseline) {
-  dds::CameraCalibration c;
-  c.width = w;
-  c.height = h;
-  c.d = {0, 0, 0, 0, 0};
-  c.k = {100, 0, w / 2.0, 0, 100, h / 2.0, 0, 0, 1};
-  c.p = {100, 0, w / 2.0, -100 * baseline, 0, 100, h / 2.0, 0, 0, 0, 1, 0};
-  return c;
+  return camera::Pinhole({w, h, 100, 100, w / 2.0, h / 2.0}, baseline);
 }
 
 class Publisher {

@@ -88,13 +88,7 @@ TEST(ActiveModels, CorrectVisionPointIsTheIdentityWithoutAModel) {
 }
 
 dds::CameraCalibration Camera() {
-  dds::CameraCalibration c;
-  c.width = 320;
-  c.height = 240;
-  c.d = {0, 0, 0, 0, 0};
-  c.k = {277, 0, 160, 0, 277, 120, 0, 0, 1};
-  c.p = {277, 0, 160, 0, 0, 277, 120, 0, 0, 0, 1, 0};
-  return c;
+  return camera::Pinhole({320, 240, 277, 277, 160, 120});
 }
 
 TEST(ModelRectification, RebuildsOnlyWhenTheExtrinsicsMoveNoticeably) {

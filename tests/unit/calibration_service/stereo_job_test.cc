@@ -17,16 +17,6 @@
 namespace epmap::mapping {
 namespace {
 
-dds::CameraCalibration CameraInfo(const dataset::CameraSensor& cam) {
-  dds::CameraCalibration c;
-  c.width = cam.width;
-  c.height = cam.height;
-  c.d = {0, 0, 0, 0, 0};
-  c.k = {cam.fu, 0, cam.cu, 0, cam.fv, cam.cv, 0, 0, 1};
-  c.p = {cam.fu, 0, cam.cu, 0, 0, cam.fv, cam.cv, 0, 0, 0, 1, 0};
-  return c;
-}
-
 struct Frame {
   StereoFrame stereo;
   std::vector<double> joints;  // encoder readings (scenario order)
@@ -38,8 +28,8 @@ class StereoJobTest : public ::testing::Test {
   void SetUp() override {
     scenario_ = sim::MakeScenario({.name = "vergence"});
     chain_.emplace(kinematics::UrdfChain::FromString(scenario_->urdf()));
-    sensors_.SetCameraInfo(0, CameraInfo(scenario_->cam0()));
-    sensors_.SetCameraInfo(1, CameraInfo(scenario_->cam1()));
+    sensors_.SetCameraInfo(0, camera::Pinhole(scenario_->cam0().pinhole()));
+    sensors_.SetCameraInfo(1, camera::Pinhole(scenario_->cam1().pinhole()));
     dir_ = testing::FreshTempDir("calib-stereo");
     store_ = std::make_unique<CalibrationStore>(dir_);
   }

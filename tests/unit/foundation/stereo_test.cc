@@ -60,5 +60,24 @@ TEST(Rectification, EurocRectifiedPairHasRowAlignedGeometry) {
   EXPECT_EQ(a.size(), cv::Size(752, 480));
 }
 
+// An already-rectified pinhole pair as CameraInfo carries it (REP 104: P[3] = -fx B on the
+// right): the rectifier passes its images through and reads back the same geometry.
+TEST(Rectification, APinholePairIsAlreadyRectified) {
+  const auto [left, right] = camera::RectifiedPinholePair({320, 240, 277, 275, 160.5, 119.5}, 0.12);
+  EXPECT_DOUBLE_EQ(right.p[3], -277 * 0.12);
+  EXPECT_DOUBLE_EQ(right.baseline_from_p(), 0.12);
+  EXPECT_DOUBLE_EQ(left.baseline_from_p(), 0.0);
+  const stereo::Rectifier rect(left, right);
+  EXPECT_TRUE(rect.identity());
+  const auto& g = rect.geometry();
+  EXPECT_EQ(g.width, 320);
+  EXPECT_EQ(g.height, 240);
+  EXPECT_DOUBLE_EQ(g.fx, 277);
+  EXPECT_DOUBLE_EQ(g.fy, 275);
+  EXPECT_DOUBLE_EQ(g.cx, 160.5);
+  EXPECT_DOUBLE_EQ(g.cy, 119.5);
+  EXPECT_NEAR(g.baseline_m, 0.12, 1e-12);
+}
+
 }  // namespace
 }  // namespace epmap
