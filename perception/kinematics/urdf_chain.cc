@@ -210,6 +210,23 @@ bool UrdfChain::HasLink(const std::string& link) const {
   return impl_->tree.getSegments().count(link) > 0;
 }
 
+std::vector<std::string> UrdfChain::LinksFixedToRoot() const {
+  std::vector<std::string> links;
+  std::vector<KDL::SegmentMap::const_iterator> open{impl_->tree.getRootSegment()};
+  while (!open.empty()) {
+    const auto element = open.back();
+    open.pop_back();
+    links.push_back(element->first);
+    const auto& children = GetTreeElementChildren(element->second);
+    for (auto child = children.rbegin(); child != children.rend(); ++child) {
+      if (GetTreeElementSegment((*child)->second).getJoint().getType() == KDL::Joint::None) {
+        open.push_back(*child);
+      }
+    }
+  }
+  return links;
+}
+
 Eigen::Isometry3d UrdfChain::LinkPose(const std::string& link,
                                       const std::vector<double>& joints) const {
   return impl_->Pose(link, joints);

@@ -50,6 +50,9 @@ class UrdfChain {
   Eigen::Isometry3d Cam1Pose(const std::vector<double>& joints) const;
   // Whether the URDF has a link of that name.
   bool HasLink(const std::string& link) const;
+  // The root and the links joined to it by fixed joints only, in tree order: the frames an
+  // odometry source may move with a pose that needs no joint reading (base_footprint, base_link).
+  std::vector<std::string> LinksFixedToRoot() const;
   // Pose of any link of the tree. Throws std::invalid_argument if the link is missing or a
   // movable joint on the way to it is not on a camera chain (its value is not read).
   Eigen::Isometry3d LinkPose(const std::string& link, const std::vector<double>& joints) const;

@@ -44,6 +44,12 @@ std::string DescribeCameraChain(const ServiceConfig& config) {
   out += fmt::format(
       "  left camera link: {}\n  right camera link: {}\n", config.left_camera_link,
       chain.has_cam1() ? config.right_camera_link : "(absent: no stereo-extrinsics calibration)");
+  const auto fixed = chain.LinksFixedToRoot();
+  out += fmt::format(
+      "  rt/odom's child_frame_id may be the root or a link fixed to it ({}): {}\n"
+      "    (another link is composed through the joints read; a frame the URDF lacks is taken "
+      "for the root, with a warning)\n",
+      fixed.size(), fmt::join(fixed, ", "));
   const auto limits = mobile_mapping::JointLimitsFromUrdfFile(config.urdf, chain.joint_names());
   out += fmt::format("  joints read from {} ({}):\n", config.topics.joints, limits.size());
   for (const auto& l : limits) {

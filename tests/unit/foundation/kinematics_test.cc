@@ -101,6 +101,11 @@ TEST(UrdfChain, LinksBelowTheRootAndTheirPoses) {
     <parent link="base"/><child link="wheel"/>
     <origin xyz="0 0.2 0.05" rpy="0 0 0"/><axis xyz="0 1 0"/>
   </joint>
+  <link name="imu_link"/>
+  <joint name="imu_joint" type="fixed">
+    <parent link="base"/><child link="imu_link"/>
+    <origin xyz="0.1 0 0.2" rpy="0 0 0"/>
+  </joint>
 </robot>)");
   const auto chain = kinematics::UrdfChain::FromString(urdf);
   EXPECT_TRUE(chain.HasLink("base"));
@@ -112,6 +117,10 @@ TEST(UrdfChain, LinksBelowTheRootAndTheirPoses) {
   EXPECT_NEAR(Eigen::AngleAxisd(T_base_pan.linear()).angle(), 0.4, 1e-12);
   EXPECT_THROW(chain.LinkPose("wheel", {0.0, 0.0}), std::invalid_argument);
   EXPECT_THROW(chain.LinkPose("base_footprint", {0.0, 0.0}), std::invalid_argument);
+  // Only fixed joints from the root: the frames odometry may move without a joint reading.
+  EXPECT_EQ(chain.LinksFixedToRoot(), (std::vector<std::string>{"base", "imu_link"}));
+  EXPECT_TRUE(
+      chain.LinkPose("imu_link", {0.3, 0.1}).translation().isApprox(Eigen::Vector3d(0.1, 0, 0.2)));
 }
 
 }  // namespace
