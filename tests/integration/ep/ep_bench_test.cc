@@ -11,7 +11,7 @@
 #include "common/process/child_process.h"
 #include "perception/kinematics/urdf_chain.h"
 #include "tests/support/test_env.h"
-#include "tests/unit/ep/head_urdf.h"
+#include "tests/support/head_urdf.h"
 #include "tests/unit/ep/synthetic_scene.h"
 
 namespace epmap {

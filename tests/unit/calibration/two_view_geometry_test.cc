@@ -9,6 +9,7 @@
 
 #include "perception/calibration/stereo_self_calibration.h"
 #include "perception/calibration/two_view_geometry.h"
+#include "tests/support/head_urdf.h"
 
 namespace epmap::calibration {
 namespace {
@@ -152,45 +153,19 @@ TEST(TwoViewGeometry, HomographyExplainsAPlaneButNotDepth) {
   EXPECT_EQ(RansacHomography(pl, pr, 2.0, 500, 1).inliers, 200);
 }
 
-constexpr const char* kEyesUrdf = R"(<?xml version="1.0"?>
-<robot name="eyes">
-  <link name="head"/><link name="tilt_link"/><link name="left_eye"/><link name="right_eye"/>
-  <link name="cam0_optical"/><link name="cam1_optical"/>
-  <joint name="eyes_tilt" type="revolute">
-    <parent link="head"/><child link="tilt_link"/>
-    <origin xyz="0.05 0 0.1" rpy="0 0 0"/><axis xyz="0 1 0"/>
-    <limit lower="-1" upper="1" effort="1" velocity="1"/>
-  </joint>
-  <joint name="left_eye_pan" type="revolute">
-    <parent link="tilt_link"/><child link="left_eye"/>
-    <origin xyz="0 0.034 0" rpy="0 0 0"/><axis xyz="0 0 1"/>
-    <limit lower="-1" upper="1" effort="1" velocity="1"/>
-  </joint>
-  <joint name="right_eye_pan" type="revolute">
-    <parent link="tilt_link"/><child link="right_eye"/>
-    <origin xyz="0 -0.034 0" rpy="0 0 0"/><axis xyz="0 0 1"/>
-    <limit lower="-1" upper="1" effort="1" velocity="1"/>
-  </joint>
-  <joint name="left_optical" type="fixed">
-    <parent link="left_eye"/><child link="cam0_optical"/>
-    <origin xyz="0 0 0" rpy="-1.5707963267948966 0 -1.5707963267948966"/>
-  </joint>
-  <joint name="right_optical" type="fixed">
-    <parent link="right_eye"/><child link="cam1_optical"/>
-    <origin xyz="0 0 0" rpy="-1.5707963267948966 0 -1.5707963267948966"/>
-  </joint>
-</robot>)";
-
 TEST(TwoViewGeometry, KinematicPriorFromTheUrdf) {
-  auto chain = kinematics::UrdfChain::FromString(kEyesUrdf);
-  chain.BindJointOrder({"eyes_tilt", "left_eye_pan", "right_eye_pan"});
+  // The test head: the neck does not move one eye against the other, the eyes' joints do.
+  auto chain = kinematics::UrdfChain::FromString(testing::kHeadUrdf);
+  chain.BindJointOrder(
+      {"eyes_tilt", "left_eye_pan", "right_eye_pan", "neck_pitch", "neck_roll", "neck_yaw"});
   const double vergence = 0.08;  // eyes turned towards each other
-  const Eigen::Isometry3d prior = KinematicPrior(chain, {0.2, -vergence / 2, vergence / 2});
+  const Eigen::Isometry3d prior =
+      KinematicPrior(chain, {0.2, -vergence / 2, vergence / 2, 0.3, -0.2, 0.4});
   EXPECT_NEAR(prior.translation().norm(), 0.068, 1e-12);
   EXPECT_NEAR(Eigen::AngleAxisd(prior.linear()).angle(), vergence, 1e-12);
   // cam1 is to the right of cam0 (optical x points right), mostly along x.
   EXPECT_GT(prior.translation().x(), 0.067);
-  EXPECT_THROW(KinematicPrior(chain, {0.1, std::nan(""), 0.0}), CalibrationError);
+  EXPECT_THROW(KinematicPrior(chain, {0.1, std::nan(""), 0.0, 0.0, 0.0, 0.0}), CalibrationError);
 }
 
 }  // namespace

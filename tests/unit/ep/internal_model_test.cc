@@ -7,7 +7,7 @@
 #include "perception/internal_model/learned_pose_model.h"
 #include "perception/internal_model/pose_source.h"
 #include "tests/support/test_env.h"
-#include "tests/unit/ep/head_urdf.h"
+#include "tests/support/head_urdf.h"
 
 namespace epmap {
 namespace {
