@@ -109,6 +109,8 @@ void Apply(const YAML::Node& root, ServiceConfig& c) {
     auto s = top.Sub("robot");
     s.Get("mode", c.mode);
     s.Get("urdf", c.urdf);
+    s.Get("urdf_topic", c.urdf_topic);
+    s.GetMs("urdf_topic_wait_ms", c.urdf_topic_wait_ns);
     s.Get("left_camera_link", c.left_camera_link);
     s.Get("right_camera_link", c.right_camera_link);
     auto cam = s.Sub("camera");
@@ -204,6 +206,12 @@ void ServiceConfig::Validate() const {
   if (pair_tolerance_ns < 0 || pair_timeout_ns <= 0) bad("ingest pairing times must be positive");
   static const std::set<std::string> kModes{"auto", "head", "static", "mobile-base"};
   if (!kModes.count(mode)) bad("robot.mode must be auto, head, static or mobile-base");
+  if (!urdf.empty() && !urdf_topic.empty()) {
+    bad("robot.urdf and robot.urdf_topic are exclusive: the URDF comes from a file or a topic");
+  }
+  if (!urdf_topic.empty() && urdf_topic_wait_ns <= 0) {
+    bad("robot.urdf_topic_wait_ms must be positive");
+  }
   if (left_camera_link.empty() || right_camera_link.empty()) {
     bad("robot.left_camera_link and robot.right_camera_link must name URDF links");
   }
@@ -357,6 +365,8 @@ std::string ToYaml(const ServiceConfig& c) {
   out << YAML::Key << "robot" << YAML::Value << YAML::BeginMap;
   out << YAML::Key << "mode" << YAML::Value << c.mode;
   out << YAML::Key << "urdf" << YAML::Value << c.urdf;
+  out << YAML::Key << "urdf_topic" << YAML::Value << c.urdf_topic;
+  out << YAML::Key << "urdf_topic_wait_ms" << YAML::Value << c.urdf_topic_wait_ns / 1e6;
   out << YAML::Key << "left_camera_link" << YAML::Value << c.left_camera_link;
   out << YAML::Key << "right_camera_link" << YAML::Value << c.right_camera_link;
   out << YAML::Key << "camera" << YAML::Value << YAML::BeginMap;

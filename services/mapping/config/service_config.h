@@ -111,6 +111,11 @@ struct ServiceConfig {
   // --- robot ---
   std::string mode = "auto";  // auto | head | static | mobile-base
   std::string urdf;           // kinematic chain from the base to the cameras' optical links
+  // Or the URDF as robot_state_publisher latches it (std_msgs/String, transient local), e.g.
+  // "rt/robot_description": epmapd waits for it at start, up to urdf_topic_wait, and fails
+  // clearly without it. Exclusive with urdf.
+  std::string urdf_topic;
+  int64_t urdf_topic_wait_ns = 10'000'000'000;
   // The URDF's links of the two cameras' optical frames (x right, y down, z forward); the
   // defaults are the dataset layout's names, a robot's own URDF usually has others.
   std::string left_camera_link = "cam0_optical";

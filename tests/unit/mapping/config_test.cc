@@ -133,5 +133,23 @@ TEST(ServiceConfig, CameraLinksOfARobotsOwnUrdf) {
   }
 }
 
+TEST(ServiceConfig, TheUrdfFromAFileOrALatchedTopic) {
+  ServiceConfig c;
+  mapping::ApplyYaml("robot:\n  urdf_topic: rt/robot_description\n  urdf_topic_wait_ms: 2500\n", c);
+  EXPECT_EQ(c.urdf_topic, "rt/robot_description");
+  EXPECT_EQ(c.urdf_topic_wait_ns, 2'500'000'000);
+  EXPECT_NO_THROW(c.Validate());
+  ServiceConfig back;
+  mapping::ApplyYaml(mapping::ToYaml(c), back);
+  EXPECT_EQ(back.urdf_topic, c.urdf_topic);
+  EXPECT_EQ(back.urdf_topic_wait_ns, c.urdf_topic_wait_ns);
+  ServiceConfig both = c;
+  both.urdf = "robot.urdf";
+  EXPECT_THROW(both.Validate(), std::invalid_argument);
+  ServiceConfig no_wait = c;
+  no_wait.urdf_topic_wait_ns = 0;
+  EXPECT_THROW(no_wait.Validate(), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace epmap
