@@ -4,6 +4,7 @@
 
 #include <cstdio>
 #include <iostream>
+#include <string>
 
 #include "clients/epmapctl/client.h"
 #include "epmap/v1/map_service.grpc.pb.h"
@@ -46,6 +47,17 @@ void PrintHuman(const epmap::v1::ServiceStatus& s) {
     std::printf("watch-unexpected streams: %u\n", s.unexpected_watchers());
   if (s.resident_mb() > 0) {
     std::printf("memory: resident %.1f MB, peak %.1f MB\n", s.resident_mb(), s.peak_resident_mb());
+  }
+  if (s.has_robot()) {
+    const auto& r = s.robot();
+    std::string joints;
+    for (const auto& j : r.joints()) joints += (joints.empty() ? "" : ", ") + j;
+    std::printf("robot: %s, root %s, cameras %s / %s, joints [%s], camera pose from %s\n",
+                r.urdf().c_str(), r.root_link().c_str(), r.left_camera_link().c_str(),
+                r.right_camera_link().empty() ? "(none)" : r.right_camera_link().c_str(),
+                joints.c_str(), r.pose_source().c_str());
+  } else {
+    std::printf("robot: no URDF (robot.urdf, --urdf or --urdf-topic)\n");
   }
   PrintCounters("rejected", s.rejected_by_reason());
   PrintCounters("key frames the maps refused (their frames were processed)",

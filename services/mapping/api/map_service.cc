@@ -74,6 +74,15 @@ grpc::Status MapServiceImpl::GetStatus(grpc::ServerContext*, const v1::GetStatus
   const auto memory = process::ReadProcessMemory();
   out->set_resident_mb(memory.resident_mb);
   out->set_peak_resident_mb(memory.peak_resident_mb);
+  if (const auto* chain = pipeline.chain()) {
+    auto* robot = out->mutable_robot();
+    robot->set_urdf(service_.config().urdf);
+    robot->set_root_link(chain->root_link());
+    robot->set_left_camera_link(chain->camera_links().left);
+    if (chain->has_cam1()) robot->set_right_camera_link(chain->camera_links().right);
+    for (const auto& joint : chain->joint_names()) robot->add_joints(joint);
+    robot->set_pose_source(pipeline.EffectivePoseSource());
+  }
   return grpc::Status::OK;
 }
 

@@ -50,6 +50,8 @@ class Pipeline {
   UnexpectedEventHub& unexpected_hub() { return unexpected_hub_; }
   // The internal model in use: urdf, learned, odometry or fixed.
   std::string EffectivePoseSource() const;
+  // The kinematic chain of robot.urdf, or nullptr without one (read-only after construction).
+  const kinematics::UrdfChain* chain() const { return chain_ ? &*chain_ : nullptr; }
 
   // Calibration (services/mapping/calibration; pipeline_calibration.cc): the models the
   // pipeline applies (an active stereo-extrinsics model replaces CameraInfo's R, P) and the tap

@@ -37,6 +37,9 @@ TEST(EurocReplayE2E, AllFortyFramesProcessedAtTwentyHertz) {
   // Its memory, as an operator sees it: resident now, and a peak at least that.
   EXPECT_GT(status.resident_mb(), 10.0) << status.DebugString();
   EXPECT_GE(status.peak_resident_mb(), status.resident_mb()) << status.DebugString();
+  // No URDF given: the status has no robot chain, and the mode is static.
+  EXPECT_FALSE(status.has_robot()) << status.DebugString();
+  EXPECT_EQ(status.mode(), "static") << status.DebugString();
   std::printf("epmapd after 40 EuRoC frames: resident %.1f MB, peak %.1f MB\n",
               status.resident_mb(), status.peak_resident_mb());
 

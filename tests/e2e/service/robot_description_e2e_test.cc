@@ -73,6 +73,15 @@ TEST(RobotDescriptionE2E, TheLatchedDescriptionIsTheServicesUrdf) {
   v1::ServiceStatus status;
   ASSERT_TRUE(epmapd.Status(&status).ok());
   EXPECT_EQ(status.mode(), "head") << status.DebugString();
+  // GetStatus says which chain the service uses, from the kept file.
+  ASSERT_TRUE(status.has_robot()) << status.DebugString();
+  EXPECT_EQ(status.robot().urdf(), (state / "robot_description.urdf").string());
+  EXPECT_EQ(status.robot().root_link(), "base_link");
+  EXPECT_EQ(status.robot().left_camera_link(), "cam0_optical");
+  EXPECT_EQ(status.robot().right_camera_link(), "cam1_optical");
+  ASSERT_EQ(status.robot().joints_size(), 1);
+  EXPECT_EQ(status.robot().joints(0), "pan");
+  EXPECT_EQ(status.robot().pose_source(), "urdf");
   EXPECT_EQ(ReadText(state / "robot_description.urdf"), urdf);
   fs::remove_all(work);
 }
