@@ -5,6 +5,7 @@
 #include <epmap_dds/ImagePubSubTypes.h>
 #include <epmap_dds/JointStatePubSubTypes.h>
 #include <epmap_dds/OdometryPubSubTypes.h>
+#include <epmap_dds/StringPubSubTypes.h>
 
 #include <condition_variable>
 #include <map>
@@ -172,6 +173,18 @@ PublishReport Publish(const Scenario& scenario, const PublishOptions& o) {
     odom =
         std::make_unique<dds::Writer<nav_msgs::msg::Odometry, nav_msgs::msg::OdometryPubSubType>>(
             participant, o.topics.odom);
+  }
+
+  // The robot's URDF latched as robot_state_publisher does (depth 1, transient local): a reader
+  // that joins while this runs still gets it, e.g. `epmapd --urdf-topic rt/robot_description`.
+  std::unique_ptr<dds::Writer<std_msgs::msg::String, std_msgs::msg::StringPubSubType>> description;
+  if (!o.topics.robot_description.empty()) {
+    description =
+        std::make_unique<dds::Writer<std_msgs::msg::String, std_msgs::msg::StringPubSubType>>(
+            participant, o.topics.robot_description, 1, dds::Durability::kTransientLocal);
+    std_msgs::msg::String urdf;
+    urdf.data(scenario.urdf());
+    description->Write(urdf);
   }
 
   // Render ahead while discovery runs: two workers, so that a frame's ~25 ms of rendering on

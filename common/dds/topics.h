@@ -13,6 +13,9 @@ struct TopicNames {
   std::string right_info = "rt/stereo/right/camera_info";
   std::string joints = "rt/joint_states";
   std::string odom = "rt/odom";
+  // The URDF as robot_state_publisher latches it (std_msgs/String, transient local): epmap-sim
+  // publishes it, epmapd reads it with --urdf-topic.
+  std::string robot_description = "rt/robot_description";
   std::string eye_hand_samples = "rt/epmap/eye_hand_samples";
   // What epmapd publishes in mobile-base mode (empty: not published): the occupancy grid as
   // nav_msgs/OccupancyGrid (transient local, as map_server), map -> odom on tf, and the

@@ -9,6 +9,7 @@
 #include <epmap_dds/ImagePubSubTypes.h>
 #include <epmap_dds/JointStatePubSubTypes.h>
 #include <epmap_dds/OdometryPubSubTypes.h>
+#include <epmap_dds/StringPubSubTypes.h>
 
 #include <map>
 #include <mutex>
@@ -70,6 +71,16 @@ TEST(EpmapSimPublish, EveryFrameArrivesIntact) {
       },
       1u << 20, 50);
 
+  // The URDF, latched as robot_state_publisher does.
+  std::vector<std::string> descriptions;
+  dds::Reader<std_msgs::msg::String, std_msgs::msg::StringPubSubType> description_reader(
+      participant, topics.robot_description,
+      [&](std_msgs::msg::String&& m) {
+        std::lock_guard lock(mutex);
+        descriptions.push_back(m.data());
+      },
+      1u << 20, 1, dds::Durability::kTransientLocal);
+
   constexpr int kFrames = 6;
   const auto r = testing::RunCommand(
       (epmap::testing::BinDir() / "epmap-sim").string() + " publish --scenario head --domain " +
@@ -91,6 +102,8 @@ TEST(EpmapSimPublish, EveryFrameArrivesIntact) {
   ASSERT_EQ(right.size(), static_cast<size_t>(kFrames));
   ASSERT_EQ(joints.size(), static_cast<size_t>(kFrames));
   ASSERT_EQ(right_infos.size(), static_cast<size_t>(kFrames));
+  ASSERT_EQ(descriptions.size(), 1u);
+  EXPECT_EQ(descriptions[0], scenario->urdf());
   int i = 0;
   int64_t first = left.begin()->first;
   for (const auto& [stamp, image] : left) {
