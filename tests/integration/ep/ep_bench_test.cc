@@ -10,8 +10,8 @@
 #include "common/dataset/writer.h"
 #include "common/process/child_process.h"
 #include "perception/kinematics/urdf_chain.h"
-#include "tests/support/test_env.h"
 #include "tests/support/head_urdf.h"
+#include "tests/support/test_env.h"
 #include "tests/unit/ep/synthetic_scene.h"
 
 namespace epmap {

@@ -6,8 +6,8 @@
 
 #include "perception/internal_model/learned_pose_model.h"
 #include "perception/internal_model/pose_source.h"
-#include "tests/support/test_env.h"
 #include "tests/support/head_urdf.h"
+#include "tests/support/test_env.h"
 
 namespace epmap {
 namespace {
