@@ -88,38 +88,50 @@ void Pipeline::WarnOnceIfTheOdometryIsNotInTheConfiguredFrames() {
                          "map -> '{}' transform on rt/tf does not join the robot's tf tree",
                          frames.frame_id, config_.maps.odom_frame, config_.maps.odom_frame));
   }
-  if (chain_ && !frames.child_frame_id.empty() && !chain_->HasLink(frames.child_frame_id)) {
-    WarnOnce("odometry_child_not_urdf_root:" + frames.child_frame_id,
-             fmt::format("rt/odom moves frame '{}', which the URDF does not have (its root link "
-                         "is '{}'): the maps take the odometry's pose for the URDF's root",
-                         frames.child_frame_id, chain_->root_link()));
-  }
 }
 
-Eigen::Isometry3d Pipeline::UrdfRootOnOdometry(const dds::PlanarOdometry& odom,
-                                               const std::vector<double>& joints) {
-  const Eigen::Isometry3d T_odom_child = internal_model::BaseOnOdometry(odom.x, odom.y, odom.theta);
-  const std::string child = sensors_.odometry_frames().child_frame_id;
-  if (!chain_ || child.empty() || child == chain_->root_link() || !chain_->HasLink(child)) {
-    return T_odom_child;
+bool Pipeline::ComposesThroughTheUrdf(const std::string& child) {
+  if (child.empty() || child == chain_->root_link()) return false;
+  if (!chain_->HasLink(child)) {
+    WarnOnce("odometry_child_not_urdf_root:" + child,
+             fmt::format("rt/odom moves frame '{}', which the URDF does not have (its root link "
+                         "is '{}'): the maps take the odometry's pose for the URDF's root",
+                         child, chain_->root_link()));
+    return false;
   }
+  // Whether the link can be placed depends on the tree, not on the joint values: zeros will do.
+  const std::vector<double> zeros(chain_->joint_names().size(), 0.0);
   try {
-    const Eigen::Isometry3d T_root_child = chain_->LinkPose(child, joints);
+    const Eigen::Vector3d t = chain_->LinkPose(child, zeros).translation();
     NoteOnce("odometry_child_composed:" + child,
              fmt::format("rt/odom moves frame '{}', a link of the URDF below its root '{}': the "
                          "root's pose is composed through the URDF ({:.3f}, {:.3f}, {:.3f}) m from "
-                         "it at the current joints",
-                         child, chain_->root_link(), T_root_child.translation().x(),
-                         T_root_child.translation().y(), T_root_child.translation().z()));
-    return internal_model::RootOnOdometry(T_odom_child, T_root_child);
+                         "it at zero joints",
+                         child, chain_->root_link(), t.x(), t.y(), t.z()));
+    return true;
   } catch (const std::invalid_argument& e) {
     // A link behind a movable joint the service does not read (e.g. a wheel): its pose is unknown.
     WarnOnce("odometry_child_not_urdf_root:" + child,
              fmt::format("rt/odom moves frame '{}', which cannot be placed under the URDF's root "
                          "'{}' ({}): the maps take the odometry's pose for the URDF's root",
                          child, chain_->root_link(), e.what()));
-    return T_odom_child;
+    return false;
   }
+}
+
+Eigen::Isometry3d Pipeline::UrdfRootOnOdometry(const dds::PlanarOdometry& odom,
+                                               const std::vector<double>& joints) {
+  const Eigen::Isometry3d T_odom_child = internal_model::BaseOnOdometry(odom.x, odom.y, odom.theta);
+  if (!chain_) return T_odom_child;
+  // Resolved (and said) once per frame name, not every frame.
+  std::string child = sensors_.odometry_frames().child_frame_id;
+  if (!odometry_child_ || odometry_child_->name != child) {
+    const bool composed = ComposesThroughTheUrdf(child);
+    odometry_child_ = OdometryChild{std::move(child), composed};
+  }
+  if (!odometry_child_->composed) return T_odom_child;
+  return internal_model::RootOnOdometry(T_odom_child,
+                                        chain_->LinkPose(odometry_child_->name, joints));
 }
 
 Pipeline::~Pipeline() {

@@ -73,7 +73,7 @@ class Pipeline {
   // URDF's left camera link: tf consumers then see the disparity and the poses in two frames.
   void WarnOnceIfTheImagesAreNotInTheUrdfCameraFrame(const std::string& image_frame_id);
   // The same for rt/odom (mobile base): its frame should be maps.odom_frame (the child of the
-  // map -> odom transform on rt/tf) and its child a link of the URDF.
+  // map -> odom transform on rt/tf). Its child frame is checked by ComposesThroughTheUrdf.
   void WarnOnceIfTheOdometryIsNotInTheConfiguredFrames();
   // The URDF root's planar pose in the odometry frame from an rt/odom reading: the reading
   // itself when rt/odom moves the root (or a frame the URDF does not have: warned once), composed
@@ -81,6 +81,9 @@ class Pipeline {
   // `joints` in chain_->joint_names() order.
   Eigen::Isometry3d UrdfRootOnOdometry(const dds::PlanarOdometry& odom,
                                        const std::vector<double>& joints);
+  // Whether rt/odom's moving frame `child` is a link the root's pose can be composed from (not
+  // the root itself); says once what it decided when that is not the plain root. Needs chain_.
+  bool ComposesThroughTheUrdf(const std::string& child);
   // A warning logged, and counted as status event `event`, the first time only.
   void WarnOnce(const std::string& event, const std::string& message);
   // The same at info level, for what is handled but worth one line in the log.
@@ -107,7 +110,13 @@ class Pipeline {
 
   std::optional<kinematics::UrdfChain> chain_;
   std::set<std::string> warned_;  // WarnOnce's events so far (pipeline thread only)
-  std::string pose_source_;       // as configured (auto resolves per frame)
+  // rt/odom's moving frame as UrdfRootOnOdometry last resolved it (pipeline thread only).
+  struct OdometryChild {
+    std::string name;
+    bool composed = false;  // the root's pose is composed through the URDF from this link
+  };
+  std::optional<OdometryChild> odometry_child_;
+  std::string pose_source_;  // as configured (auto resolves per frame)
   std::optional<internal_model::LearnedPoseSource> learned_;
   std::vector<std::string> learned_inputs_;
   stereo::SgbmMatcher matcher_;  // full-frame SGBM when EP is disabled
