@@ -4,20 +4,23 @@
 # `epmap-bench maps` on it, two at a time, and prints one line per run plus the mean. One run's
 # map figures swing with a single correlation alias or view placement, so compare the means.
 # Needs a build (scripts/build.sh). Extra arguments go to `epmap-bench maps`, e.g.
-# --no-map-correlation or --reject-contested.
+# --no-map-correlation or --reject-contested. --route rooms records the route that steps into
+# seven of the eight rooms (epmap-sim --route) instead of the default corridors route.
 #
-#   scripts/building-maps.sh [--work DIR] [--tag NAME] [-- BENCH ARGS...]
+#   scripts/building-maps.sh [--work DIR] [--tag NAME] [--route corridors|rooms] [-- BENCH ARGS...]
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 WORK=building-maps
 TAG=default
+ROUTE=corridors
 while [ $# -gt 0 ]; do
   case "$1" in
     --work) WORK="$2"; shift 2 ;;
     --tag) TAG="$2"; shift 2 ;;
+    --route) ROUTE="$2"; shift 2 ;;
     --) shift; break ;;
-    -h|--help) sed -n '2,9p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,10p' "$0"; exit 0 ;;
     *) echo "building-maps.sh: unknown argument $1 (bench arguments go after --)" >&2; exit 2 ;;
   esac
 done
@@ -28,19 +31,22 @@ done
 
 declare -A RECORD_ARGS=([fwd]="" [rev]="--reverse" [s7]="--seed 7" [s11]="--seed 11")
 RUNS=(fwd rev s7 s11)
+# The corridors route's datasets keep their old names (data-fwd, ...).
+DATA=data
+[ "$ROUTE" = corridors ] || { DATA="data-$ROUTE"; TAG="$TAG-$ROUTE"; }
 mkdir -p "$WORK"
 for run in "${RUNS[@]}"; do
-  if [ ! -d "$WORK/data-$run/mav0" ]; then
-    echo "recording $run ..."
+  if [ ! -d "$WORK/$DATA-$run/mav0" ]; then
+    echo "recording $run ($ROUTE route) ..."
     # shellcheck disable=SC2086  # the record arguments are words
-    "$BIN/epmap-sim" record --scenario building ${RECORD_ARGS[$run]} --out "$WORK/data-$run" \
-      > "$WORK/record-$run.log" 2>&1
+    "$BIN/epmap-sim" record --scenario building --route "$ROUTE" ${RECORD_ARGS[$run]} \
+      --out "$WORK/$DATA-$run" > "$WORK/record-$ROUTE-$run.log" 2>&1
   fi
 done
 
 bench() {
   local run=$1; shift
-  "$BIN/epmap-bench" maps --dataset "$WORK/data-$run" --out "$WORK/$TAG-$run" --json \
+  "$BIN/epmap-bench" maps --dataset "$WORK/$DATA-$run" --out "$WORK/$TAG-$run" --json \
     --no-variants "$@" > "$WORK/$TAG-$run.json" 2> "$WORK/$TAG-$run.log"
 }
 for pair in "fwd rev" "s7 s11"; do
@@ -63,6 +69,6 @@ for run in "${RUNS[@]}"; do
     "$(after "$j" corrected iou)" "$(after "$j" corrected iou_observed)" \
     "$(value "$j" per_key_frame_ms_median)"
 done | tee "$WORK/$TAG-summary.txt"
-awk '{c+=$3; s+=$5; i+=$7; n++} END {printf "mean  coverage %.4f  stray %.4f  grid IoU over seen cells %.4f\n", c/n, s/n, i/n}' \
+awk '{c+=$3; s+=$5; g+=$6; i+=$7; n++} END {printf "mean  coverage %.4f  stray %.4f  grid IoU %.4f (over seen cells %.4f)\n", c/n, s/n, g/n, i/n}' \
   "$WORK/$TAG-summary.txt"
 echo "outputs (pmap.svg, grid.png, figures.json, ...) in $WORK/$TAG-<run>/"

@@ -61,8 +61,8 @@ Eigen::Isometry3d Planar(double x, double y, double theta) {
   return T;
 }
 
-std::vector<State> Timeline(bool reverse) {
-  std::vector<Eigen::Vector2d> route = BuildingRoute();
+std::vector<State> Timeline(const std::string& route_name, bool reverse) {
+  std::vector<Eigen::Vector2d> route = BuildingRoute(route_name);
   if (reverse) std::reverse(route.begin(), route.end());
   std::vector<State> states;
   State s;
@@ -123,7 +123,7 @@ class BuildingScenario final : public Scenario {
   explicit BuildingScenario(const ScenarioOptions& options)
       : Scenario(options),
         world_(BuildBuilding(options.seed)),
-        states_(Timeline(options.reverse)),
+        states_(Timeline(options.route, options.reverse)),
         true_urdf_(options.noise ? TruePanRobotUrdf() : std::string(PanRobotUrdf())),
         nominal_chain_(kinematics::UrdfChain::FromString(PanRobotUrdf())),
         true_chain_(kinematics::UrdfChain::FromString(true_urdf_)) {
@@ -149,7 +149,7 @@ class BuildingScenario final : public Scenario {
     camera_.cy = (camera_.height - 1) / 2.0;
     // The world frame is the forward run's start pose (also for --reverse, so that both runs
     // share one map).
-    const auto route = BuildingRoute();
+    const auto route = BuildingRoute(options.route);
     T_world_floor_ = Planar(route[0].x(), route[0].y(),
                             std::atan2(route[1].y() - route[0].y(), route[1].x() - route[0].x()))
                          .inverse();
@@ -228,9 +228,10 @@ class BuildingScenario final : public Scenario {
   }
 
   std::string Describe() const override {
-    return std::string("building") + (options().reverse ? " (reverse)" : "") +
-           (options().walker ? " with a walker" : "") + ": " + std::to_string(frames_) +
-           " stereo frames " +
+    return std::string("building") +
+           (options().route != "corridors" ? " route " + options().route : "") +
+           (options().reverse ? " (reverse)" : "") + (options().walker ? " with a walker" : "") +
+           ": " + std::to_string(frames_) + " stereo frames " +
            (options().first_frame > 0 ? "from frame " + std::to_string(options().first_frame) + " "
                                       : std::string()) +
            std::to_string(camera_.width) + "x" + std::to_string(camera_.height) +

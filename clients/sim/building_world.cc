@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <stdexcept>
 #include <utility>
 
 #include "clients/sim/scene_builder.h"
@@ -158,13 +159,15 @@ class Furnisher {
 
   // A generic office room: desks with chairs, a cabinet, a bookshelf and a plant, placed along
   // the walls so that the middle stays free.
-  void FurnishRoom(double x0, double y0, double x1, double y1) {
+  // `cabinet_at`: where along the north wall the cabinet starts (share of the width); rooms
+  // south of corridor H have their doors in that wall and keep them clear.
+  void FurnishRoom(double x0, double y0, double x1, double y1, double cabinet_at = 0.3) {
     const double w = x1 - x0, d = y1 - y0;
     Desk(x0 + 0.3, y0 + 0.35 * d, x0 + 1.0, y0 + 0.35 * d + 1.4);
     Chair(x0 + 1.25, y0 + 0.35 * d + 0.7);
     Desk(x1 - 1.0, y0 + 0.55 * d, x1 - 0.3, y0 + 0.55 * d + 1.4);
     Chair(x1 - 1.25, y0 + 0.55 * d + 0.7);
-    Cabinet(x0 + 0.3 * w, y1 - 0.5, x0 + 0.3 * w + 0.9, y1 - 0.08, 1.8);
+    Cabinet(x0 + cabinet_at * w, y1 - 0.5, x0 + cabinet_at * w + 0.9, y1 - 0.08, 1.8);
     Bookshelf(x0 + 0.6 * w, y0 + 0.08, x0 + 0.6 * w + 1.0, y0 + 0.4, 2);
     Plant(x1 - 0.5, y1 - 0.5);
   }
@@ -328,8 +331,8 @@ BuildingWorld BuildBuilding(uint64_t seed) {
   f.Plant(16.0, 27.9);
   // The other rooms, seen through their doors.
   f.FurnishRoom(6.56, 0.06, 12.94, 12.94);
-  f.FurnishRoom(15.56, 0.06, 21.69, 12.94);
-  f.FurnishRoom(21.81, 0.06, 27.94, 12.94);
+  f.FurnishRoom(15.56, 0.06, 21.69, 12.94, 0.05);  // door at x 18.0-18.9
+  f.FurnishRoom(21.81, 0.06, 27.94, 12.94, 0.05);  // door at x 24.0-24.9
   f.FurnishRoom(0.06, 15.56, 6.44, 28.44);
   f.FurnishRoom(6.56, 15.56, 12.94, 28.44);
   f.FurnishRoom(21.81, 15.56, 27.94, 28.44);
@@ -347,9 +350,22 @@ BuildingWorld BuildBuilding(uint64_t seed) {
   return world;
 }
 
-std::vector<Eigen::Vector2d> BuildingRoute() {
-  return {{3.4, 6.5},   {3.4, 14.25}, {14.25, 14.25}, {14.25, 21.0}, {19.5, 21.0},
-          {19.5, 25.5}, {17.0, 25.5}, {17.0, 21.0},   {14.25, 21.0}, {14.25, 6.6}};
+std::vector<Eigen::Vector2d> BuildingRoute(const std::string& name) {
+  if (name == "corridors") {
+    return {{3.4, 6.5},   {3.4, 14.25}, {14.25, 14.25}, {14.25, 21.0}, {19.5, 21.0},
+            {19.5, 25.5}, {17.0, 25.5}, {17.0, 21.0},   {14.25, 21.0}, {14.25, 6.6}};
+  }
+  if (name == "rooms") {
+    // Corridor H's centre line is y = 14.25; its doors are at x = 3.4 (R1, R5), 9.95 (R2, R6),
+    // 18.45 (R3) and 24.45 (R4, R8). The robot stands 1.75 m inside each room (y = 11.25 or
+    // 17.25), clear of the furniture, and looks around there.
+    constexpr double kMid = 14.25, kSouth = 13.0 - 1.75, kNorth = 15.5 + 1.75;
+    return {{3.4, 6.5},    {3.4, kMid},     {3.4, kNorth},   {3.4, kMid},
+            {9.95, kMid},  {9.95, kNorth},  {9.95, kMid},    {9.95, kSouth},
+            {9.95, kMid},  {18.45, kMid},   {18.45, kSouth}, {18.45, kMid},
+            {24.45, kMid}, {24.45, kSouth}, {24.45, kMid},   {24.45, kNorth}};
+  }
+  throw std::invalid_argument("unknown building route '" + name + "' (corridors or rooms)");
 }
 
 Eigen::Isometry3d WalkerPose(double t) {

@@ -8,6 +8,7 @@
 
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "clients/sim/renderer.h"
@@ -32,10 +33,15 @@ inline constexpr double kCeilingHeightM = 2.6;
 
 BuildingWorld BuildBuilding(uint64_t seed);
 
-// The route of the forward run (floor frame): the robot starts at the first point facing the
-// second and drives straight between consecutive points, turning in place at each.
-// About 59 m through a room, a door, both corridors and a second room.
-std::vector<Eigen::Vector2d> BuildingRoute();
+// The routes of the forward run (floor frame): the robot starts at the first point facing the
+// second and drives straight between consecutive points, turning in place at each. Both start
+// in room R1 facing north, so they share the world frame.
+// - corridors (the default): about 59 m through a room, a door, both corridors and a second
+//   room; the other six rooms are seen only through their doors.
+// - rooms: about 60 m along corridor H, stepping 1.75 m into each room off it (seven of the
+//   eight) to look around there, as a robot mapping the floor would.
+// Throws std::invalid_argument for another name.
+std::vector<Eigen::Vector2d> BuildingRoute(const std::string& name = "corridors");
 
 // A person who walks to and fro along corridor H on their own (scenario building --walker):
 // at 1.1 m/s along y = 15.0 (the corridor's north half; the route keeps to y = 14.25) between

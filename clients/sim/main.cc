@@ -35,6 +35,7 @@ struct CommonFlags {
   double flicker_scale = 1;
   bool no_noise = false;
   bool reverse = false;
+  std::string route = "corridors";
   bool disparity_every_frame = false;
   bool walker = false;
   int first_frame = 0;
@@ -54,6 +55,9 @@ struct CommonFlags {
     app->add_flag("--no-noise", no_noise,
                   "exact encoders, true chain = URDF, no image noise or flicker");
     app->add_flag("--reverse", reverse, "building: drive the route in the reverse direction");
+    app->add_option("--route", route,
+                    "building: corridors (default: two rooms, both corridors) or rooms (corridor "
+                    "H, stepping into seven of the eight rooms)");
     app->add_flag("--disparity-every-frame", disparity_every_frame,
                   "building: true disparity for every frame, not only at the stops");
     app->add_flag("--walker", walker,
@@ -76,6 +80,7 @@ struct CommonFlags {
     o.flicker_scale = flicker_scale;
     o.noise = !no_noise;
     o.reverse = reverse;
+    o.route = route;
     o.disparity_every_frame = disparity_every_frame;
     o.walker = walker;
     o.first_frame = first_frame;

@@ -60,6 +60,13 @@ std::unique_ptr<Scenario> MakeScenario(const ScenarioOptions& options) {
   if (options.reverse && name != "building") {
     throw std::invalid_argument("--reverse applies to the building scenario only");
   }
+  if (options.route != "corridors" && name != "building") {
+    throw std::invalid_argument("--route applies to the building scenario only");
+  }
+  if (options.route != "corridors" && options.route != "rooms") {
+    throw std::invalid_argument("unknown building route '" + options.route +
+                                "' (corridors or rooms)");
+  }
   if (options.disparity_every_frame && name != "building") {
     throw std::invalid_argument(
         "--disparity-every-frame applies to the building scenario only (the others write it "

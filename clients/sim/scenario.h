@@ -38,6 +38,7 @@ struct ScenarioOptions {
   bool noise = true;                   // false: exact encoders and odometry, true chain = URDF,
                                        // no image noise, no flicker (for exactness checks)
   bool reverse = false;                // building: drive the route backwards
+  std::string route = "corridors";     // building: corridors | rooms (see BuildingRoute)
   bool disparity_every_frame = false;  // building: true disparity for every frame, not only at
                                        // the look-around stops (to score the EP map driving)
   bool walker = false;  // building: a person walks to and fro along the first corridor

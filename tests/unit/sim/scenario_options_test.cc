@@ -32,6 +32,14 @@ TEST(ScenarioOptions, BadInputIsRefusedWithTheReason) {
   o.reverse = true;
   EXPECT_NE(ErrorOf(o).find("building scenario only"), std::string::npos);
   o.reverse = false;
+  o.route = "rooms";
+  EXPECT_NE(ErrorOf(o).find("--route applies to the building scenario only"), std::string::npos);
+  o.name = "building";
+  o.route = "attic";
+  EXPECT_NE(ErrorOf(o).find("unknown building route 'attic' (corridors or rooms)"),
+            std::string::npos);
+  o.name = "head";
+  o.route = "corridors";
   o.walker = true;
   EXPECT_NE(ErrorOf(o).find("--walker applies to the building scenario only"), std::string::npos);
   o.walker = false;

@@ -19,8 +19,9 @@ inline const Scenario& Shared(const ScenarioOptions& o) {
   const std::string key =
       o.name + "/" + std::to_string(o.width) + "x" + std::to_string(o.height) + "/" +
       std::to_string(o.frames) + "/" + std::to_string(o.seed) + "/" + std::to_string(o.noise) +
-      std::to_string(o.reverse) + std::to_string(o.walker) + "/" + std::to_string(o.first_frame) +
-      "/" + std::to_string(o.encoder_noise_scale) + "/" + std::to_string(o.flicker_scale);
+      std::to_string(o.reverse) + std::to_string(o.walker) + "/" + o.route + "/" +
+      std::to_string(o.first_frame) + "/" + std::to_string(o.encoder_noise_scale) + "/" +
+      std::to_string(o.flicker_scale);
   auto& s = cache[key];
   if (!s) s = MakeScenario(o);
   return *s;
