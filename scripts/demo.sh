@@ -6,17 +6,19 @@
 # --scenario building runs the mobile base instead: a pan-head robot drives ~60 m through the
 # synthetic building floor (a person walks along its first corridor) and the client writes the
 # maps for planners (perceptual map, occupancy grid, corrected pose); the whole route takes
-# about 3 min at the scenario's 10 Hz unless --seconds cuts it short. The progress line comes
+# about 3 min at the scenario's 10 Hz unless --seconds cuts it short (--route rooms: the route
+# that steps into seven of the eight rooms, about 3 min 40 s). The progress line comes
 # every 5 s; the pictures are rewritten every --refresh seconds (default 15) and the whole set
 # (expectation images, PFM) at the end: the client shares the 2 cores with the service and the
 # simulator, and rewriting everything every 5 s made the head's service drop 0-10 of 900 frames.
 #
-#   scripts/demo.sh [--scenario head|building] [--seconds N] [--refresh S] [--keep-going]
-#                   [--out DIR]
+#   scripts/demo.sh [--scenario head|building] [--route corridors|rooms] [--seconds N]
+#                   [--refresh S] [--keep-going] [--out DIR]
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 SCENARIO="head"
+ROUTE=corridors
 SECONDS_TO_RUN=
 KEEP_GOING=0
 REFRESH=15
@@ -24,11 +26,12 @@ OUT=demo-out
 while [ $# -gt 0 ]; do
   case "$1" in
     --scenario) SCENARIO="$2"; shift 2 ;;
+    --route) ROUTE="$2"; shift 2 ;;
     --seconds) SECONDS_TO_RUN="$2"; shift 2 ;;
     --refresh) REFRESH="$2"; shift 2 ;;
     --keep-going) KEEP_GOING=1; shift ;;
     --out) OUT="$2"; shift 2 ;;
-    -h|--help) sed -n '2,16p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,17p' "$0"; exit 0 ;;
     *) echo "demo.sh: unknown argument $1" >&2; exit 2 ;;
   esac
 done
@@ -36,6 +39,14 @@ case "$SCENARIO" in
   head | building) ;;
   *) echo "demo.sh: --scenario is head or building, not '$SCENARIO'" >&2; exit 2 ;;
 esac
+case "$ROUTE" in
+  corridors) ROUTE_FRAMES=1849 ;;
+  rooms) ROUTE_FRAMES=2207 ;;
+  *) echo "demo.sh: --route is corridors or rooms, not '$ROUTE'" >&2; exit 2 ;;
+esac
+if [ "$ROUTE" != corridors ] && [ "$SCENARIO" != building ]; then
+  echo "demo.sh: --route applies to --scenario building only" >&2; exit 2
+fi
 if [ -n "$SECONDS_TO_RUN" ] && ! [[ "$SECONDS_TO_RUN" =~ ^[1-9][0-9]*$ ]]; then
   echo "demo.sh: --seconds takes a whole number of seconds, not '$SECONDS_TO_RUN'" >&2
   exit 2
@@ -66,7 +77,8 @@ trap cleanup EXIT INT TERM
 
 # Both robots publish over DDS at their own rates (the head 30 Hz, the base 10 Hz), as a camera
 # driver and encoders would: the stamps are the wall clock, so a faster rate would be a faster
-# robot. The head runs 30 s by default; the building robot its whole route (1849 frames).
+# robot. The head runs 30 s by default; the building robot its whole route (1849 frames, or 2207
+# on the rooms route).
 if [ "$SCENARIO" = head ]; then
   RATE=30
   URDF=clients/sim/urdf/icub_head.urdf
@@ -79,10 +91,10 @@ else
   EPMAPD_ARGS=()
   # The person walking along the first corridor is what the unexpected-motion detector flags
   # and what the maps leave out.
-  SIM_ARGS=(--walker)
+  SIM_ARGS=(--walker --route "$ROUTE")
   RATE=10
   FRAMES=$(( ${SECONDS_TO_RUN:-0} * RATE ))
-  if [ "$FRAMES" = 0 ] || [ "$FRAMES" -gt 1849 ]; then FRAMES=1849; fi
+  if [ "$FRAMES" = 0 ] || [ "$FRAMES" -gt "$ROUTE_FRAMES" ]; then FRAMES=$ROUTE_FRAMES; fi
 fi
 if [ "$KEEP_GOING" = 1 ] && [ "$SCENARIO" = head ]; then FRAMES=100000000; fi
 

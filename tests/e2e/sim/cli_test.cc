@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 
 #include "common/dataset/dataset.h"
 #include "tests/e2e/sim/run_command.h"
@@ -62,6 +63,11 @@ TEST(EpmapSimCli, OtherBadFlagsAreRefused) {
   const auto reverse = testing::RunCommand(Sim() + " record --scenario head --reverse" + out);
   EXPECT_EQ(reverse.exit_code, 2) << reverse.output;
   EXPECT_NE(reverse.output.find("building scenario only"), std::string::npos);
+  const auto route = testing::RunCommand(Sim() + " record --scenario building --route attic" + out);
+  EXPECT_EQ(route.exit_code, 2) << route.output;
+  EXPECT_NE(route.output.find("unknown building route 'attic' (corridors or rooms)"),
+            std::string::npos)
+      << route.output;
   const auto no_scenario = testing::RunCommand(Sim() + " record" + out);
   EXPECT_NE(no_scenario.exit_code, 0);
   EXPECT_NE(no_scenario.output.find("--scenario"), std::string::npos) << no_scenario.output;
@@ -85,6 +91,25 @@ TEST(EpmapSimCli, RecordsEveryScenario) {
     EXPECT_EQ(d.rectified(), name != "vergence") << name;
     EXPECT_TRUE(fs::exists(dir / name / "mav0/gt_extrinsics0/data.csv"));
   }
+  // The rooms route starts where the corridors route does: the same first frame.
+  const auto rooms =
+      testing::RunCommand(Sim() +
+                          " record --scenario building --route rooms --frames 3 --size "
+                          "80x60 --seed 7 --out " +
+                          (dir / "rooms").string());
+  ASSERT_EQ(rooms.exit_code, 0) << rooms.output;
+  EXPECT_EQ(dataset::Load(dir / "rooms").frames.size(), 3u);
+  const auto first_image = [&](const std::string& name) {
+    std::ifstream in(dir / name / "mav0/cam0/data.csv");
+    std::string header, row;
+    std::getline(in, header);
+    std::getline(in, row);
+    const std::string file = row.substr(row.find(',') + 1);
+    std::ifstream png(dir / name / "mav0/cam0/data" / file, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(png), {});
+  };
+  EXPECT_FALSE(first_image("rooms").empty());
+  EXPECT_EQ(first_image("rooms"), first_image("building"));
   const auto r = testing::RunCommand(Sim() + " record --scenario eye-hand --out " +
                                      (dir / "eye-hand").string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
