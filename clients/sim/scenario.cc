@@ -3,6 +3,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "clients/sim/building_world.h"
 #include "clients/sim/scenario_factories.h"
 
 namespace epmap::sim {
@@ -63,10 +64,7 @@ std::unique_ptr<Scenario> MakeScenario(const ScenarioOptions& options) {
   if (options.route != "corridors" && name != "building") {
     throw std::invalid_argument("--route applies to the building scenario only");
   }
-  if (options.route != "corridors" && options.route != "rooms") {
-    throw std::invalid_argument("unknown building route '" + options.route +
-                                "' (corridors or rooms)");
-  }
+  if (name == "building") BuildingRoute(options.route);  // throws for an unknown route
   if (options.disparity_every_frame && name != "building") {
     throw std::invalid_argument(
         "--disparity-every-frame applies to the building scenario only (the others write it "

@@ -11,6 +11,7 @@
 #include "clients/sim/scenario.h"
 #include "common/dataset/dataset.h"
 #include "perception/kinematics/urdf_chain.h"
+#include "perception/perceptual_map/boundary.h"
 #include "tests/support/test_env.h"
 #include "tests/unit/sim/warp_check.h"
 
@@ -27,15 +28,6 @@ ScenarioOptions Building(bool noise = true, bool reverse = false,
   o.reverse = reverse;
   o.route = route;
   return o;
-}
-
-// Distance from p to the segment ab.
-double DistanceToSegment(const Eigen::Vector2d& p, const dataset::WallSegment& w) {
-  const Eigen::Vector2d a(w.x1, w.y1), b(w.x2, w.y2);
-  const Eigen::Vector2d ab = b - a;
-  const double t =
-      ab.squaredNorm() > 0 ? std::clamp((p - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0) : 0.0;
-  return (a + t * ab - p).norm();
 }
 
 Eigen::Isometry3d Planar(const dataset::PlanarPose& p) {
@@ -132,7 +124,8 @@ TEST_P(BuildingRoutes, TheRobotKeepsClearOfWallsAndFurniture) {
   for (int i = 0; i < s->frame_count(); ++i) {
     const auto base = *s->Render(i).gt_base;
     for (const auto& w : obstacles) {
-      closest = std::min(closest, DistanceToSegment({base.x, base.y}, w));
+      closest = std::min(closest, perceptual_map::PointSegmentDistance({base.x, base.y},
+                                                                       {w.x1, w.y1}, {w.x2, w.y2}));
     }
   }
   EXPECT_GT(closest, 0.25);
