@@ -325,6 +325,20 @@ PoseErrors FinalErrors(const Prepared& p, const Truth& truth, const Eigen::Isome
   return e;
 }
 
+// Position error of every key frame's pose against the truth (the final error alone
+// hides a trajectory that wanders and comes back).
+std::vector<double> PositionErrors(const Prepared& p, const Truth& truth,
+                                   const std::vector<epmap::localisation::PoseRecord>& poses,
+                                   bool odometry) {
+  std::vector<double> out;
+  for (const auto& r : poses) {
+    const auto& estimate = odometry ? r.T_world_base_odometry : r.T_world_base;
+    const double e = FinalErrors(p, truth, estimate, r.stamp_ns).position_m;
+    if (std::isfinite(e)) out.push_back(e);
+  }
+  return out;
+}
+
 // The correlation's shifts checked against the truth: for each applied shift, the true position
 // error at the stop it corrected, before and after (the stop's pose in the final trajectory is the
 // one right after its shift: later shifts move only later poses).
@@ -614,6 +628,10 @@ int RunCommand(int argc, char** argv) {
   int view_min = 0;
   int min_tracked = 0;
   double refine_disparity = 0;
+  double occupied_depth = -1;
+  double grid_prior = -1;
+  double min_shift = -1;
+  double odometry_drift = -1;
   size_t max_frames = 1'000'000;
   app.add_option("--dataset", dataset_path, "dataset folder with odometry0/")->required();
   app.add_option("--out", out_dir, "output folder (created)")->required();
@@ -631,6 +649,18 @@ int RunCommand(int argc, char** argv) {
   app.add_option("--refine-disparity", refine_disparity,
                  "perceptual map: refine each edge disparity within +-PX over the matching window "
                  "(EdgeStereoParams::refine_disparity_px; 0 = off, the default)");
+  app.add_option("--occupied-depth", occupied_depth,
+                 "occupancy grid: each point also marks occupied the cells up to M behind it "
+                 "along its ray (MeasurementParams::occupied_depth_m; default: the mapper's)");
+  app.add_option("--grid-prior", grid_prior,
+                 "occupancy grid: weight of the prior in the ray frequencies "
+                 "(MeasurementParams::frequency_prior; default: the mapper's)");
+  app.add_option("--min-shift", min_shift,
+                 "map correlation: smallest correction applied, m "
+                 "(MobileMapperParams::correlation_min_shift_m; default: the mapper's)");
+  app.add_option("--odometry-drift", odometry_drift,
+                 "map correlation: odometry's drift per metre driven, against which each "
+                 "correlation shift is weighed (MobileMapperParams::odometry_drift_per_m)");
   app.add_option("--max-key-frames", max_frames, "stop after this many key frames");
   app.add_flag("--no-variants", no_variants,
                "skip the runs without heading correction / without any correction");
@@ -656,6 +686,10 @@ int RunCommand(int argc, char** argv) {
     params.edges.refine_disparity_px = refine_disparity;
     params.map_correlation = !no_map_correlation;
     params.edges.reject_contested = reject_contested;
+    if (occupied_depth >= 0) params.measurement.occupied_depth_m = occupied_depth;
+    if (grid_prior >= 0) params.measurement.frequency_prior = grid_prior;
+    if (min_shift >= 0) params.correlation_min_shift_m = min_shift;
+    if (odometry_drift >= 0) params.odometry_drift_per_m = odometry_drift;
 
     const MotionMasks masks = no_motion_mask ? MotionMasks{} : RunExpectedPerception(p);
     const RunResult main = Run(p, params, true, masks);
@@ -786,7 +820,15 @@ int RunCommand(int argc, char** argv) {
       << (std::isfinite(cor.heading_deg) ? (cor.heading_deg <= heading_target ? "true" : "false")
                                          : "null")
       << "},\"position\":{\"odometry_final_error_m\":" << FormatFixed(odo.position_m, 3)
-      << ",\"corrected_final_error_m\":" << FormatFixed(cor.position_m, 3) << "}";
+      << ",\"corrected_final_error_m\":" << FormatFixed(cor.position_m, 3);
+    {
+      const auto odo_all = PositionErrors(p, truth, poses, true);
+      const auto cor_all = PositionErrors(p, truth, poses, false);
+      j << ",\"key_frames_scored\":" << cor_all.size()
+        << ",\"odometry_median_error_m\":" << FormatFixed(Median(odo_all), 3)
+        << ",\"corrected_median_error_m\":" << FormatFixed(Median(cor_all), 3)
+        << ",\"corrected_p90_error_m\":" << FormatFixed(Percentile(cor_all, 0.9), 3) << "}";
+    }
     {
       const ShiftCheck sc = CheckShifts(p, truth, main.reports, poses);
       j << ",\"correlation\":{\"enabled\":" << (params.map_correlation ? "true" : "false")

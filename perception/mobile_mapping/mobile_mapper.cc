@@ -40,6 +40,12 @@ void MobileMapperParams::Validate() const {
   features.Validate();
   registration.Validate();
   pose.Validate();
+  if (!(odometry_drift_per_m >= 0) || !std::isfinite(odometry_drift_per_m)) {
+    throw std::invalid_argument("mobile mapper: odometry_drift_per_m must be >= 0 and finite");
+  }
+  if (!(correlation_sigma_m > 0) || !std::isfinite(correlation_sigma_m)) {
+    throw std::invalid_argument("mobile mapper: correlation_sigma_m must be > 0 and finite");
+  }
   if (!std::isfinite(floor_z_in_base_m)) {
     throw std::invalid_argument("mobile mapper: floor_z_in_base_m must be finite");
   }
@@ -278,7 +284,7 @@ void MobileMapper::CloseGroup(KeyFrameReport* report) {
     group_.frames.clear();
     return;
   }
-  MergeGroup(group_, {grid_, perceptual_, poses_, counters_}, report);
+  MergeGroup(group_, {grid_, perceptual_, poses_, counters_, filter_}, report);
   group_.frames.clear();
 }
 
@@ -297,6 +303,13 @@ void MobileMapper::MergeGroup(const Group& group, MapsState state, KeyFrameRepor
       local.AddPoint(origin, T * fp.points_base[i], fp.sigmas[i], params_.measurement);
     }
   }
+  // Odometry may have drifted since the previous stop by a share of the distance driven.
+  const Eigen::Vector2d stop_xy = T_world_base.translation().head<2>();
+  if (state.filter.last_stop) {
+    const double drift = params_.odometry_drift_per_m * (stop_xy - *state.filter.last_stop).norm();
+    state.filter.variance += Eigen::Vector2d::Constant(drift * drift);
+  }
+  state.filter.last_stop = stop_xy;
   int sx = 0, sy = 0;
   if (!state.grid.empty() && params_.map_correlation) {
     const auto reg = occupancy::CorrelateMaps(local, state.grid, params_.correlation_search_m);
@@ -312,12 +325,26 @@ void MobileMapper::MergeGroup(const Group& group, MapsState state, KeyFrameRepor
       const bool gain = reg.score > reg.zero_score * (1.0 + params_.correlation_min_gain);
       const bool take_x = sharp_x && (reg.dx_cells == 0 || gain);
       const bool take_y = sharp_y && (reg.dy_cells == 0 || gain);
-      const Eigen::Vector2d shift(take_x ? reg.dx_m : 0.0, take_y ? reg.dy_m : 0.0);
-      if (shift.norm() > params_.correlation_max_shift_m) {
+      const Eigen::Vector2d measured(take_x ? reg.dx_m : 0.0, take_y ? reg.dy_m : 0.0);
+      // Kalman update per axis that measured anything: how much of the shift to believe.
+      const double r = params_.correlation_sigma_m * params_.correlation_sigma_m;
+      Eigen::Vector2d kalman_gain = Eigen::Vector2d::Zero();
+      for (int a = 0; a < 2; ++a) {
+        const double p = state.filter.variance[a];
+        const bool filtered = params_.odometry_drift_per_m > 0;
+        if (a == 0 ? take_x : take_y) kalman_gain[a] = filtered ? p / (p + r) : 1.0;
+      }
+      const Eigen::Vector2d shift = kalman_gain.cwiseProduct(measured);
+      if (measured.norm() > params_.correlation_max_shift_m) {
         ++state.counters.shifts_refused;  // far more than odometry drifts between two stops
       } else if (shift.norm() >= params_.correlation_min_shift_m) {
-        sx = take_x ? reg.dx_cells : 0;
-        sy = take_y ? reg.dy_cells : 0;
+        state.filter.variance =
+            (Eigen::Vector2d::Ones() - kalman_gain).cwiseProduct(state.filter.variance);
+        // The local map is merged shifted by the whole cells of what was applied.
+        const double res = state.grid.resolution();
+        const bool whole = params_.odometry_drift_per_m <= 0;
+        sx = take_x ? (whole ? reg.dx_cells : static_cast<int>(std::lround(shift.x() / res))) : 0;
+        sy = take_y ? (whole ? reg.dy_cells : static_cast<int>(std::lround(shift.y() / res))) : 0;
         report->shifted = true;
         report->shift_m = shift;
         state.poses.ApplyTranslation(shift, group.first_record);
@@ -356,8 +383,9 @@ std::shared_ptr<const MapsSnapshot> MobileMapper::SnapshotWithOpenStop() const {
   perceptual_map::PerceptualMapper perceptual = perceptual_;
   localisation::PoseCorrector poses = poses_;
   MapperCounters counters = counters_;
+  PositionFilter filter = filter_;
   KeyFrameReport ignored;
-  MergeGroup(group_, {grid, perceptual, poses, counters}, &ignored);
+  MergeGroup(group_, {grid, perceptual, poses, counters, filter}, &ignored);
   auto s = std::make_shared<MapsSnapshot>();
   s->stamp_ns = last_stamp_ns_;
   s->includes_open_stop = true;

@@ -40,6 +40,9 @@ void MeasurementParams::Validate() const {
   if (!(empty_gap_sigmas >= 0)) {
     throw std::invalid_argument("occupancy measurement: empty_gap_sigmas must be >= 0");
   }
+  if (!(occupied_depth_m >= 0) || !std::isfinite(occupied_depth_m)) {
+    throw std::invalid_argument("occupancy measurement: occupied_depth_m must be >= 0 and finite");
+  }
   if (!(max_range_m > 0)) {
     throw std::invalid_argument("occupancy measurement: max_range_m must be > 0");
   }
@@ -57,6 +60,37 @@ inline void SetFrequencies(float hits, float passes, float prior, float& occupie
   const float total = hits + passes + prior;
   occupied = hits / total;
   empty = passes / total;
+}
+
+// Amanatides-Woo: calls visit(ix, iy, t_in, t_out) for each lattice cell the segment from a
+// to b (in cell units) crosses, in order, with the segment's parameters where it enters and
+// leaves the cell (0..1), from a's cell to b's, until visit returns false.
+template <typename Visit>
+void WalkCells(const Eigen::Vector2d& a, const Eigen::Vector2d& b, Visit&& visit) {
+  int64_t ix = static_cast<int64_t>(std::floor(a.x())),
+          iy = static_cast<int64_t>(std::floor(a.y()));
+  const int64_t ex = static_cast<int64_t>(std::floor(b.x())),
+                ey = static_cast<int64_t>(std::floor(b.y()));
+  const double dx = b.x() - a.x(), dy = b.y() - a.y();
+  const int step_x = dx > 0 ? 1 : -1, step_y = dy > 0 ? 1 : -1;
+  const double inf = std::numeric_limits<double>::infinity();
+  const double t_delta_x = dx != 0 ? 1.0 / std::abs(dx) : inf;
+  const double t_delta_y = dy != 0 ? 1.0 / std::abs(dy) : inf;
+  double t_max_x = dx != 0 ? (static_cast<double>(ix + (step_x > 0 ? 1 : 0)) - a.x()) / dx : inf;
+  double t_max_y = dy != 0 ? (static_cast<double>(iy + (step_y > 0 ? 1 : 0)) - a.y()) / dy : inf;
+  double t_in = 0;
+  while (t_in < 1.0) {
+    const double t_out = std::min({t_max_x, t_max_y, 1.0});
+    if (!visit(ix, iy, t_in, t_out) || (ix == ex && iy == ey)) return;
+    if (t_max_x < t_max_y) {
+      ix += step_x;
+      t_max_x += t_delta_x;
+    } else {
+      iy += step_y;
+      t_max_y += t_delta_y;
+    }
+    t_in = t_out;
+  }
 }
 
 }  // namespace
@@ -168,9 +202,13 @@ bool LayeredGrid::AddPoint(const Eigen::Vector3d& origin, const Eigen::Vector3d&
   const double weight = std::min(1.0, std::pow(res / sigma, mp.weight_exponent));
   const double gap = std::max(mp.empty_gap_sigmas * sigma, res);
 
+  const double behind = mp.occupied_depth_m;
+  const Eigen::Vector2d beyond = p + (p - o) * (behind / horizontal);
   const int64_t ex = CellX(p.x()), ey = CellY(p.y());
   const int64_t sx = CellX(o.x()), sy = CellY(o.y());
-  EnsureCovers(std::min(sx, ex), std::min(sy, ey), std::max(sx, ex), std::max(sy, ey));
+  const int64_t bx = CellX(beyond.x()), by = CellY(beyond.y());
+  EnsureCovers(std::min({sx, ex, bx}), std::min({sy, ey, by}), std::max({sx, ex, bx}),
+               std::max({sy, ey, by}));
   const bool frequency = mp.membership == Membership::kRayFrequency;
   if (frequency && layers_.front().hits.empty()) {
     for (auto& layer : layers_) {
@@ -180,54 +218,36 @@ bool LayeredGrid::AddPoint(const Eigen::Vector3d& origin, const Eigen::Vector3d&
   }
   const float prior = static_cast<float>(mp.frequency_prior);
 
-  // Amanatides-Woo traversal of the cells between the head and the point, in the plane; the
-  // height of the ray inside each cell picks the layer the empty evidence goes to.
-  const double x0 = o.x() / res, y0 = o.y() / res;
-  const double dx = (p.x() - o.x()) / res, dy = (p.y() - o.y()) / res;
-  int64_t ix = sx, iy = sy;
-  const int step_x = dx > 0 ? 1 : -1, step_y = dy > 0 ? 1 : -1;
-  const double inf = std::numeric_limits<double>::infinity();
-  const double t_delta_x = dx != 0 ? 1.0 / std::abs(dx) : inf;
-  const double t_delta_y = dy != 0 ? 1.0 / std::abs(dy) : inf;
-  double t_max_x = dx != 0 ? (static_cast<double>(ix + (step_x > 0 ? 1 : 0)) - x0) / dx : inf;
-  double t_max_y = dy != 0 ? (static_cast<double>(iy + (step_y > 0 ? 1 : 0)) - y0) / dy : inf;
-  double t_in = 0;
+  // The cells between the head and the point, in the plane; the height of the ray inside each
+  // cell picks the layer the empty evidence goes to.
   const double t_empty_end = (horizontal - gap) / horizontal;
   const float empty_k = static_cast<float>(0.5 * mp.confidence_evidence);
-  while (!(ix == ex && iy == ey) && t_in < 1.0) {
-    const double t_out = std::min({t_max_x, t_max_y, 1.0});
-    if (t_out <= t_empty_end) {
-      const double z = origin.z() + 0.5 * (t_in + t_out) * (point.z() - origin.z());
-      const int l = LayerOf(z);
-      if (l >= 0) {
-        const int c = static_cast<int>(ix - min_ix_), r = static_cast<int>(iy - min_iy_);
-        Layer& L = layers_[static_cast<size_t>(l)];
-        if (frequency) {
-          float& passes = L.passes.at<float>(r, c);
-          passes += static_cast<float>(weight);
-          SetFrequencies(L.hits.at<float>(r, c), passes, prior, L.occupied.at<float>(r, c),
-                         L.empty.at<float>(r, c));
-        } else {
-          Union(L.empty.at<float>(r, c), mp.empty_evidence);
-        }
-        Union(L.confidence.at<float>(r, c), empty_k);
+  WalkCells(o / res, p / res, [&](int64_t ix, int64_t iy, double t_in, double t_out) {
+    if ((ix == ex && iy == ey) || t_out > t_empty_end) {
+      return false;  // the rest of the ray is within the point's uncertainty
+    }
+    const double z = origin.z() + 0.5 * (t_in + t_out) * (point.z() - origin.z());
+    const int l = LayerOf(z);
+    if (l >= 0) {
+      const int c = static_cast<int>(ix - min_ix_), r = static_cast<int>(iy - min_iy_);
+      Layer& L = layers_[static_cast<size_t>(l)];
+      if (frequency) {
+        float& passes = L.passes.at<float>(r, c);
+        passes += static_cast<float>(weight);
+        SetFrequencies(L.hits.at<float>(r, c), passes, prior, L.occupied.at<float>(r, c),
+                       L.empty.at<float>(r, c));
+      } else {
+        Union(L.empty.at<float>(r, c), mp.empty_evidence);
       }
-    } else {
-      break;  // the rest of the ray is within the point's uncertainty
+      Union(L.confidence.at<float>(r, c), empty_k);
     }
-    if (t_max_x < t_max_y) {
-      ix += step_x;
-      t_max_x += t_delta_x;
-    } else {
-      iy += step_y;
-      t_max_y += t_delta_y;
-    }
-    t_in = t_out;
-  }
+    return true;
+  });
   const int l = LayerOf(point.z());
-  if (l >= 0) {
-    const int c = static_cast<int>(ex - min_ix_), r = static_cast<int>(ey - min_iy_);
-    Layer& L = layers_[static_cast<size_t>(l)];
+  if (l < 0) return true;
+  Layer& L = layers_[static_cast<size_t>(l)];
+  const auto hit = [&](int64_t ix, int64_t iy) {
+    const int c = static_cast<int>(ix - min_ix_), r = static_cast<int>(iy - min_iy_);
     if (frequency) {
       float& hits = L.hits.at<float>(r, c);
       hits += static_cast<float>(weight);
@@ -237,6 +257,15 @@ bool LayeredGrid::AddPoint(const Eigen::Vector3d& origin, const Eigen::Vector3d&
       Union(L.occupied.at<float>(r, c), mp.occupied_evidence * weight);
     }
     Union(L.confidence.at<float>(r, c), mp.confidence_evidence * weight);
+  };
+  hit(ex, ey);
+  // A point is where a surface begins; what lies just behind it along the ray is the object's
+  // body (a wall's thickness), marked occupied too (at the point's height).
+  if (behind > 0) {
+    WalkCells(p / res, beyond / res, [&](int64_t ix, int64_t iy, double, double) {
+      if (ix != ex || iy != ey) hit(ix, iy);
+      return true;
+    });
   }
   return true;
 }

@@ -55,6 +55,9 @@ struct MeasurementParams {
   // cell), so the point's own uncertainty never clears it. With kRayFrequency the passes a
   // noisy point's neighbours get are outweighed by the hits, so the gap can be smaller.
   double empty_gap_sigmas = 1.0;
+  // A point also marks occupied the cells behind it along the ray up to this far (in the plane,
+  // at its height): the body of the surface it lies on. 0 marks the point's cell only.
+  double occupied_depth_m = 0.0;
   // Range weight w = min(1, (resolution / sigma)^weight_exponent).
   double weight_exponent = 1.0;
   // Farther points are ignored: at 8 m a stereo point of this rig is uncertain by more than

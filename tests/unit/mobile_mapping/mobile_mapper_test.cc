@@ -300,10 +300,44 @@ TEST_F(MobileMapperTest, AStopWithNoEdgesIsCountedNotFatal) {
   EXPECT_GE(mapper.Snapshot()->perceptual.segments.size(), segments_before);
 }
 
+// The correlation's Kalman filter (odometry_drift_per_m > 0): trusting odometry (a tiny drift)
+// leaves the poses where the run without any correlation puts them; with the default 0 the
+// shifts are taken whole, as before the filter existed.
+TEST_F(MobileMapperTest, TheCorrelationFilterWeighsShiftsAgainstOdometryDrift) {
+  const auto run = [](const mobile_mapping::MobileMapperParams& p) {
+    MobileMapper mapper(testing::BumblebeeLikeCamera(), p);
+    for (const auto& f : *frames_) EXPECT_TRUE(mapper.AddKeyFrame(f).accepted);
+    mapper.Flush();
+    return mapper.Snapshot();
+  };
+  auto p = Params();
+  const auto whole = run(p);
+  ASSERT_GT(whole->counters.shifts_applied, 0u);  // the correlation moves this run
+  p.map_correlation = false;
+  const auto without = run(p);
+  p.map_correlation = true;
+  p.odometry_drift_per_m = 1e-6;
+  const auto trusting = run(p);
+  double most_apart = 0, whole_apart = 0;
+  for (size_t k = 0; k < without->poses.size(); ++k) {
+    const auto t = without->poses[k].T_world_base.translation();
+    most_apart = std::max(most_apart, (trusting->poses[k].T_world_base.translation() - t).norm());
+    whole_apart = std::max(whole_apart, (whole->poses[k].T_world_base.translation() - t).norm());
+  }
+  EXPECT_LT(most_apart, 1e-3);
+  EXPECT_GT(whole_apart, 5e-3);
+}
+
 TEST(MobileMapper, BadConfigurationIsRefused) {
   auto cam = testing::BumblebeeLikeCamera();
   mobile_mapping::MobileMapperParams p;
   p.view_min_key_frames = -1;
+  EXPECT_THROW(MobileMapper(cam, p), std::invalid_argument);
+  p = {};
+  p.odometry_drift_per_m = -0.01;
+  EXPECT_THROW(MobileMapper(cam, p), std::invalid_argument);
+  p = {};
+  p.correlation_sigma_m = 0;
   EXPECT_THROW(MobileMapper(cam, p), std::invalid_argument);
   cam.baseline_m = 0;
   EXPECT_THROW(MobileMapper(cam, {}), std::invalid_argument);

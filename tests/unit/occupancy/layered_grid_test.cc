@@ -293,6 +293,37 @@ TEST(Merge, WeightedAveragingByConfidence) {
   EXPECT_THROW(other_layers.MergeWeighted(local), std::invalid_argument);
 }
 
+// occupied_depth_m: a point marks the cells behind it along its ray too (the body of the
+// surface it lies on: a 12 cm wall seen from either side fills the same cells).
+TEST(LayeredGrid, OccupiedDepthMarksTheBodyBehindAPoint) {
+  occupancy::MeasurementParams mp;
+  const float one_hit = static_cast<float>(1 / (1 + mp.frequency_prior));
+  LayeredGrid surface_only;
+  ASSERT_TRUE(surface_only.AddPoint({0.05, 0.05, 1.0}, {3.05, 0.05, 1.0}, 0.01, mp));
+  EXPECT_NEAR(surface_only.At(1, 30, 0).occupied, one_hit, 1e-6);
+  EXPECT_EQ(surface_only.At(1, 31, 0).confidence, 0.0F);
+
+  mp.occupied_depth_m = 0.1;
+  LayeredGrid with_body;
+  ASSERT_TRUE(with_body.AddPoint({0.05, 0.05, 1.0}, {3.05, 0.05, 1.0}, 0.01, mp));
+  EXPECT_NEAR(with_body.At(1, 30, 0).occupied, one_hit, 1e-6);
+  EXPECT_NEAR(with_body.At(1, 31, 0).occupied, one_hit, 1e-6);
+  EXPECT_EQ(with_body.At(1, 31, 0).empty, 0.0F);
+  EXPECT_EQ(with_body.At(1, 32, 0).confidence, 0.0F);  // no farther than the depth
+  EXPECT_EQ(with_body.At(0, 31, 0).confidence, 0.0F);  // at the point's height only
+  // Along a diagonal ray the body follows the ray, not the axes.
+  LayeredGrid diagonal;
+  ASSERT_TRUE(diagonal.AddPoint({0.05, 0.05, 1.0}, {2.05, 2.05, 1.0}, 0.01, mp));
+  EXPECT_GT(diagonal.At(1, 20, 20).occupied, 0.0F);
+  EXPECT_GT(diagonal.At(1, 21, 21).occupied, 0.0F);
+  EXPECT_EQ(diagonal.At(1, 20, 19).occupied, 0.0F);
+
+  for (const double bad : {-0.1, std::numeric_limits<double>::quiet_NaN()}) {
+    mp.occupied_depth_m = bad;
+    EXPECT_THROW(mp.Validate(), std::invalid_argument) << bad;
+  }
+}
+
 TEST(LayeredGrid, BadParametersAreRefused) {
   EXPECT_THROW(LayeredGrid(occupancy::GridParams{0.0, {0.1, 1.0}, 1.0}), std::invalid_argument);
   EXPECT_THROW(LayeredGrid(occupancy::GridParams{0.1, {1.0, 0.1}, 1.0}), std::invalid_argument);
