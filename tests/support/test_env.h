@@ -3,11 +3,16 @@
 // CTest sets EPMAP_BIN_DIR, EPMAP_SOURCE_DIR and EPMAP_SHARED_DIR (see cmake/EpmapTargets.cmake);
 // a test binary run by hand falls back to the same places, compiled in by epmap_test.
 
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <sys/file.h>
 #include <unistd.h>
 
+#include <cstdint>
 #include <cstdlib>
 #include <filesystem>
+#include <map>
+#include <mutex>
 #include <string>
 
 #ifndef EPMAP_DEFAULT_BIN_DIR
@@ -33,9 +38,30 @@ inline std::filesystem::path SharedDataDir() {
   return EnvPath("EPMAP_SHARED_DIR", EPMAP_DEFAULT_SHARED_DIR) / "data";
 }
 
-// A DDS domain id of this test process's own (0..232), so parallel CTest runs never cross.
+// A DDS domain id of this test process's own (20..219), so parallel CTest runs never cross.
+// The same salt gives the same id within a process. Hashing the pid alone let two tests meet
+// on one domain now and then (200 ids; a run then saw the other's samples), so each id is
+// reserved across processes by an exclusive flock on a file in the temp dir, held until the
+// process exits: the first free id from the hash on is taken.
 inline uint32_t UniqueDomainId(uint32_t salt = 0) {
-  return static_cast<uint32_t>((static_cast<uint32_t>(::getpid()) * 7u + salt) % 200u) + 20u;
+  static std::mutex mutex;
+  static std::map<uint32_t, uint32_t> by_salt;
+  std::lock_guard lock(mutex);
+  if (const auto it = by_salt.find(salt); it != by_salt.end()) return it->second;
+  const uint32_t first = (static_cast<uint32_t>(::getpid()) * 7u + salt) % 200u;
+  for (uint32_t k = 0; k < 200u; ++k) {
+    const uint32_t domain = (first + k) % 200u + 20u;
+    const auto path = std::filesystem::temp_directory_path() /
+                      ("epmap-dds-domain-" + std::to_string(domain) + ".lock");
+    const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0666);
+    if (fd < 0) continue;
+    if (::flock(fd, LOCK_EX | LOCK_NB) == 0) {
+      by_salt[salt] = domain;  // fd stays open: the reservation lasts as long as the process
+      return domain;
+    }
+    ::close(fd);
+  }
+  return first + 20u;  // every id taken: share one rather than fail
 }
 
 // A fresh empty folder under the system temp dir, removed by the caller if wanted.
