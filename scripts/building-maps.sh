@@ -6,21 +6,26 @@
 # Needs a build (scripts/build.sh). Extra arguments go to `epmap-bench maps`, e.g.
 # --no-map-correlation or --reject-contested. --route rooms records the route that steps into
 # seven of the eight rooms (epmap-sim --route) instead of the default corridors route.
+# --odometry-scale-error E records odometry that under-counts the distance by E (epmap-sim's
+# option of that name; the datasets and outputs get an -se<E> suffix).
 #
-#   scripts/building-maps.sh [--work DIR] [--tag NAME] [--route corridors|rooms] [-- BENCH ARGS...]
+#   scripts/building-maps.sh [--work DIR] [--tag NAME] [--route corridors|rooms]
+#                            [--odometry-scale-error E] [-- BENCH ARGS...]
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 WORK=building-maps
 TAG=default
 ROUTE=corridors
+SCALE_ERROR=
 while [ $# -gt 0 ]; do
   case "$1" in
     --work) WORK="$2"; shift 2 ;;
     --tag) TAG="$2"; shift 2 ;;
     --route) ROUTE="$2"; shift 2 ;;
+    --odometry-scale-error) SCALE_ERROR="$2"; shift 2 ;;
     --) shift; break ;;
-    -h|--help) sed -n '2,10p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,13p' "$0"; exit 0 ;;
     *) echo "building-maps.sh: unknown argument $1 (bench arguments go after --)" >&2; exit 2 ;;
   esac
 done
@@ -34,13 +39,18 @@ RUNS=(fwd rev s7 s11)
 # The corridors route's datasets keep their old names (data-fwd, ...).
 DATA=data
 [ "$ROUTE" = corridors ] || { DATA="data-$ROUTE"; TAG="$TAG-$ROUTE"; }
+SIM_ARGS=()
+if [ -n "$SCALE_ERROR" ]; then
+  DATA="$DATA-se$SCALE_ERROR"; TAG="$TAG-se$SCALE_ERROR"
+  SIM_ARGS=(--odometry-scale-error "$SCALE_ERROR")
+fi
 mkdir -p "$WORK"
 for run in "${RUNS[@]}"; do
   if [ ! -d "$WORK/$DATA-$run/mav0" ]; then
     echo "recording $run ($ROUTE route) ..."
     # shellcheck disable=SC2086  # the record arguments are words
     "$BIN/epmap-sim" record --scenario building --route "$ROUTE" ${RECORD_ARGS[$run]} \
-      --out "$WORK/$DATA-$run" > "$WORK/record-$ROUTE-$run.log" 2>&1
+      "${SIM_ARGS[@]}" --out "$WORK/$DATA-$run" > "$WORK/record-$DATA-$run.log" 2>&1
   fi
 done
 

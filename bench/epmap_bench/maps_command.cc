@@ -623,6 +623,7 @@ int RunCommand(int argc, char** argv) {
                argv[0]);
   std::string dataset_path, out_dir, compare_path;
   bool json = false, no_variants = false, no_motion_mask = false, no_map_correlation = false;
+  bool place_by_common_objects = false;
   bool reject_contested = false;
   double floor_z = 0.0;
   int view_min = 0;
@@ -630,6 +631,7 @@ int RunCommand(int argc, char** argv) {
   double refine_disparity = 0;
   double occupied_depth = -1;
   double grid_prior = -1;
+  double grid_max_range = -1;
   double min_shift = -1;
   double odometry_drift = -1;
   size_t max_frames = 1'000'000;
@@ -652,6 +654,9 @@ int RunCommand(int argc, char** argv) {
   app.add_option("--occupied-depth", occupied_depth,
                  "occupancy grid: each point also marks occupied the cells up to M behind it "
                  "along its ray (MeasurementParams::occupied_depth_m; default: the mapper's)");
+  app.add_option("--grid-max-range", grid_max_range,
+                 "occupancy grid: points farther from the camera are left out of the grid "
+                 "(MeasurementParams::max_range_m; default: the mapper's)");
   app.add_option("--grid-prior", grid_prior,
                  "occupancy grid: weight of the prior in the ray frequencies "
                  "(MeasurementParams::frequency_prior; default: the mapper's)");
@@ -670,6 +675,10 @@ int RunCommand(int argc, char** argv) {
   app.add_flag("--no-map-correlation", no_map_correlation,
                "heading correction only: no local/global map correlation at the stops (paper 002, "
                "Sec. 4), to measure what the correlation adds");
+  app.add_flag("--place-by-common-objects", place_by_common_objects,
+               "perceptual map: place each view's new objects from the nearest common object "
+               "(paper 003 Sec. III-C) instead of by the corrected pose (PerceptualMapParams::"
+               "place_by_pose off)");
   app.add_flag("--no-motion-mask", no_motion_mask,
                "do not run the EP before the maps (epmapd leaves what the EP finds moving on its "
                "own out of the maps)");
@@ -685,9 +694,11 @@ int RunCommand(int argc, char** argv) {
     if (min_tracked != 0) params.perceptual.min_tracked = min_tracked;  // validated there
     params.edges.refine_disparity_px = refine_disparity;
     params.map_correlation = !no_map_correlation;
+    if (place_by_common_objects) params.perceptual.place_by_pose = false;
     params.edges.reject_contested = reject_contested;
     if (occupied_depth >= 0) params.measurement.occupied_depth_m = occupied_depth;
     if (grid_prior >= 0) params.measurement.frequency_prior = grid_prior;
+    if (grid_max_range >= 0) params.measurement.max_range_m = grid_max_range;
     if (min_shift >= 0) params.correlation_min_shift_m = min_shift;
     if (odometry_drift >= 0) params.odometry_drift_per_m = odometry_drift;
 
@@ -853,7 +864,9 @@ int RunCommand(int argc, char** argv) {
         in_map += v.in_map;
         by_motion += v.in_map && v.placed_by_pose;
       }
-      j << ",\"map_views\":" << in_map << ",\"map_views_placed_by_motion\":" << by_motion;
+      j << ",\"view_placement\":\""
+        << (params.perceptual.place_by_pose ? "corrected pose" : "common objects (paper 003 III-C)")
+        << "\",\"map_views\":" << in_map << ",\"map_views_placed_by_motion\":" << by_motion;
     }
     if (!truth.walls.empty()) {
       const double cov = epmap::mobile_mapping::CoveredShare(truth.walls, segs, 0.5);
@@ -932,7 +945,9 @@ int RunCommand(int argc, char** argv) {
         << FormatFixed(
                s.wall_cells ? static_cast<double>(s.wall_cells_observed) / s.wall_cells : kNaN, 4)
         << ",\"precision\":" << FormatFixed(s.precision, 4)
-        << ",\"recall_observed\":" << FormatFixed(s.recall_observed, 4) << "}";
+        << ",\"recall_observed\":" << FormatFixed(s.recall_observed, 4)
+        << ",\"false_beside_wall\":" << s.false_beside_wall
+        << ",\"false_away_from_wall\":" << s.false_away_from_wall << "}";
       return o.str();
     };
     const auto grid_score = [&](const epmap::occupancy::GridExport& g) {
@@ -954,26 +969,31 @@ int RunCommand(int argc, char** argv) {
     if (!no_variants) {
       struct Variant {
         const char* name;
-        bool heading, correlation, place_by_pose;
+        bool heading, correlation, other_placement;
       };
+      // The perceptual map placed the other way: from common objects (paper 003) when this run
+      // placed its views by the pose, and the reverse.
+      const bool by_pose = params.perceptual.place_by_pose;
+      const char* other_placement =
+          by_pose ? "perceptual_map_placed_by_common_objects" : "perceptual_map_placed_by_pose";
       std::ostringstream v;
       for (const Variant var : {Variant{"no_heading_correction", false, true, false},
                                 Variant{"odometry_only", false, false, false},
-                                Variant{"perceptual_map_placed_by_pose", true, true, true}}) {
+                                Variant{other_placement, true, true, true}}) {
         auto vp = params;
         vp.visual_heading = var.heading;
         vp.map_correlation = var.correlation;
-        vp.perceptual.place_by_pose = var.place_by_pose;
+        if (var.other_placement) vp.perceptual.place_by_pose = !by_pose;
         const RunResult r = Run(p, vp, false, masks);
         const auto& rl = r.maps->poses.back();
         const PoseErrors e = FinalErrors(p, truth, rl.T_world_base, rl.stamp_ns);
         const auto g = r.maps->grid.Export();
-        if (!var.place_by_pose) {
+        if (!var.other_placement) {
           if (!truth.walls.empty()) j << ",\"" << var.name << "\":" << grid_score(g);
           cv::imwrite((fs::path(out_dir) / (std::string("grid_") + var.name + ".png")).string(),
                       GridPicture(g, truth, r.maps->poses));
         } else {
-          cv::imwrite((fs::path(out_dir) / "pmap_placed_by_pose.png").string(),
+          cv::imwrite((fs::path(out_dir) / (std::string(var.name) + ".png")).string(),
                       PmapPicture(r.maps->perceptual, truth, true_path));
         }
         v << (v.tellp() > 0 ? "," : "") << "{\"name\":\"" << var.name

@@ -290,7 +290,9 @@ class BuildingScenario final : public Scenario {
           true_right * right_scale + sigma * std::sqrt(std::abs(true_right)) * rng.Gaussian();
       const double left =
           true_left * left_scale + sigma * std::sqrt(std::abs(true_left)) * rng.Gaussian();
-      const double d = (right + left) / 2, turn = (right - left) / kWheelbaseM;
+      // The encoders count the travel of wheels (1 + E_s) larger than they really are.
+      const double counted = 1.0 / (1.0 + options().odometry_scale_error);
+      const double d = counted * (right + left) / 2, turn = counted * (right - left) / kWheelbaseM;
       x += d * std::cos(theta + turn / 2);
       y += d * std::sin(theta + turn / 2);
       theta = Wrap(theta + turn);

@@ -32,6 +32,7 @@ struct CommonFlags {
   uint64_t seed = 1;
   std::string size;
   double encoder_noise_scale = 1;
+  double odometry_scale_error = 0;
   double flicker_scale = 1;
   bool no_noise = false;
   bool reverse = false;
@@ -54,6 +55,9 @@ struct CommonFlags {
                     "multiplies the illumination flicker (1 = default)");
     app->add_flag("--no-noise", no_noise,
                   "exact encoders, true chain = URDF, no image noise or flicker");
+    app->add_option("--odometry-scale-error", odometry_scale_error,
+                    "building: both wheels travel this share more than the odometry counts "
+                    "(0.01 = 1 %; default 0)");
     app->add_flag("--reverse", reverse, "building: drive the route in the reverse direction");
     app->add_option("--route", route,
                     "building: corridors (default: two rooms, both corridors) or rooms (corridor "
@@ -80,6 +84,7 @@ struct CommonFlags {
     o.flicker_scale = flicker_scale;
     o.noise = !no_noise;
     o.reverse = reverse;
+    o.odometry_scale_error = odometry_scale_error;
     o.route = route;
     o.disparity_every_frame = disparity_every_frame;
     o.walker = walker;

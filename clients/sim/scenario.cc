@@ -58,6 +58,12 @@ std::unique_ptr<Scenario> MakeScenario(const ScenarioOptions& options) {
       !std::isfinite(options.encoder_noise_scale) || !std::isfinite(options.flicker_scale)) {
     throw std::invalid_argument("noise and flicker scales must be finite and >= 0");
   }
+  if (!(std::abs(options.odometry_scale_error) < 0.2)) {
+    throw std::invalid_argument("odometry scale error must be finite and within +-0.2");
+  }
+  if (options.odometry_scale_error != 0 && name != "building") {
+    throw std::invalid_argument("--odometry-scale-error applies to the building scenario only");
+  }
   if (options.reverse && name != "building") {
     throw std::invalid_argument("--reverse applies to the building scenario only");
   }

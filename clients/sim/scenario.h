@@ -32,12 +32,15 @@ struct ScenarioOptions {
   std::string name = "head";  // head | vergence | building | eye-hand
   int frames = 0;             // 0 = the scenario's default
   uint64_t seed = 1;
-  int width = 0, height = 0;           // 0 = the scenario's default image size
-  double encoder_noise_scale = 1;      // multiplies encoder (and odometry) noise
-  double flicker_scale = 1;            // multiplies the illumination flicker
-  bool noise = true;                   // false: exact encoders and odometry, true chain = URDF,
-                                       // no image noise, no flicker (for exactness checks)
-  bool reverse = false;                // building: drive the route backwards
+  int width = 0, height = 0;       // 0 = the scenario's default image size
+  double encoder_noise_scale = 1;  // multiplies encoder (and odometry) noise
+  double flicker_scale = 1;        // multiplies the illumination flicker
+  bool noise = true;               // false: exact encoders and odometry, true chain = URDF,
+                                   // no image noise, no flicker (for exactness checks)
+  bool reverse = false;            // building: drive the route backwards
+  // building: both wheels travel this much more than the encoders count (UMBmark's scale
+  // error E_s, e.g. 0.01 for a 1 % worn or under-inflated tyre); 0 = none, as before.
+  double odometry_scale_error = 0;
   std::string route = "corridors";     // building: corridors | rooms (see BuildingRoute)
   bool disparity_every_frame = false;  // building: true disparity for every frame, not only at
                                        // the look-around stops (to score the EP map driving)

@@ -206,6 +206,23 @@ GridScore ScoreGrid(const occupancy::GridExport& g, const std::vector<Segment2>&
     uni += occ || wall[i];
     uni_obs += occ || (wall[i] && known);
   }
+  for (uint32_t r = 0; r < g.height; ++r) {
+    for (uint32_t c = 0; c < g.width; ++c) {
+      const size_t i = static_cast<size_t>(r) * g.width + c;
+      const bool known = g.occupancy[i] != occupancy::GridExport::kUnknown;
+      if (!known || g.occupancy[i] < occupied_threshold || wall[i]) continue;
+      bool beside = false;
+      for (uint32_t rr = r > 0 ? r - 1 : 0; rr <= std::min(r + 1, g.height - 1) && !beside; ++rr) {
+        for (uint32_t cc = c > 0 ? c - 1 : 0; cc <= std::min(c + 1, g.width - 1); ++cc) {
+          if (wall[static_cast<size_t>(rr) * g.width + cc]) {
+            beside = true;
+            break;
+          }
+        }
+      }
+      ++(beside ? score.false_beside_wall : score.false_away_from_wall);
+    }
+  }
   score.iou = uni ? static_cast<double>(score.intersection) / static_cast<double>(uni) : 0.0;
   score.iou_observed =
       uni_obs ? static_cast<double>(score.intersection) / static_cast<double>(uni_obs) : 0.0;

@@ -66,6 +66,10 @@ struct GridScore {
   size_t intersection = 0;
   double precision = 0;        // occupied cells that are wall cells (intersection / occupied)
   double recall_observed = 0;  // known wall cells found occupied (intersection / observed)
+  // Where the occupied cells that are not wall cells lie: touching a wall cell (8-neighbour:
+  // a wall drawn one cell off, or thicker than it is) or farther (furniture, scatter).
+  size_t false_beside_wall = 0;
+  size_t false_away_from_wall = 0;
 };
 
 // Rasterises the walls at the grid's resolution and lattice (every cell the wall line touches)

@@ -41,8 +41,8 @@ struct PerceptualMapParams {
   // runs, mean wall coverage 45.8 -> 49.7 %, stray length 24.5 -> 18.0 %.
   double anchor_motion_tolerance_m = 0.3;
   // Place new objects by the robot's pose estimate instead of triangulating them from common
-  // objects (III-C). Not the paper's model: a comparison for when the pose is trusted (e.g.
-  // corrected by paper 002's method).
+  // objects (III-C). Not the paper's model, which had only odometry: for a caller whose pose
+  // is corrected otherwise (mobile_mapping::MobileMapper turns it on: paper 002's correction).
   bool place_by_pose = false;
   BoundaryParams boundary;
   void Validate() const;

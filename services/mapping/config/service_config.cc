@@ -172,6 +172,8 @@ void Apply(const YAML::Node& root, ServiceConfig& c) {
     s.Get("key_frame_min_pan_rad", c.maps.key_frame_min_pan_rad);
     s.Get("visual_heading", c.maps.visual_heading);
     s.Get("map_correlation", c.maps.map_correlation);
+    s.Get("odometry_drift_per_m", c.maps.odometry_drift_per_m);
+    s.Get("place_views_by_pose", c.maps.place_views_by_pose);
     s.Get("view_min_key_frames", c.maps.view_min_key_frames);
     s.Get("max_odometry_step_m", c.maps.max_odometry_step_m);
     s.Get("max_odometry_step_rad", c.maps.max_odometry_step_rad);
@@ -264,6 +266,9 @@ void ServiceConfig::Validate() const {
           "must be positive");
     }
     if (m.view_min_key_frames < 0) bad("maps.view_min_key_frames must be >= 0 (0 = automatic)");
+    if (!(m.odometry_drift_per_m >= 0) || !std::isfinite(m.odometry_drift_per_m)) {
+      bad("maps.odometry_drift_per_m must be >= 0 and finite (0 = every shift taken whole)");
+    }
     if (!(m.max_odometry_step_m > 0) || !(m.max_odometry_step_rad > 0) ||
         !(m.max_odometry_speed_mps > 0)) {
       bad("maps.max_odometry_step_m, max_odometry_step_rad and max_odometry_speed_mps must be "
@@ -424,6 +429,8 @@ std::string ToYaml(const ServiceConfig& c) {
   out << YAML::Key << "key_frame_min_pan_rad" << YAML::Value << c.maps.key_frame_min_pan_rad;
   out << YAML::Key << "visual_heading" << YAML::Value << c.maps.visual_heading;
   out << YAML::Key << "map_correlation" << YAML::Value << c.maps.map_correlation;
+  out << YAML::Key << "odometry_drift_per_m" << YAML::Value << c.maps.odometry_drift_per_m;
+  out << YAML::Key << "place_views_by_pose" << YAML::Value << c.maps.place_views_by_pose;
   out << YAML::Key << "view_min_key_frames" << YAML::Value << c.maps.view_min_key_frames;
   out << YAML::Key << "max_odometry_step_m" << YAML::Value << c.maps.max_odometry_step_m;
   out << YAML::Key << "max_odometry_step_rad" << YAML::Value << c.maps.max_odometry_step_rad;

@@ -67,6 +67,13 @@ struct MapsSettings {
   double key_frame_min_pan_rad = 0.15;
   bool visual_heading = true;   // paper 002, Sec. 3.3: heading corrected from the images
   bool map_correlation = true;  // paper 002, Sec. 4: position corrected at each stop
+  // How much the base's odometry drifts per metre driven: each correlation shift is weighed
+  // against it (mobile_mapping::MobileMapperParams::odometry_drift_per_m); 0 takes every
+  // shift whole, as paper 002 does.
+  double odometry_drift_per_m = 0.02;
+  // Perceptual-map views placed by the corrected pose; false: triangulated from the nearest
+  // common object, as paper 003 Sec. III-C (perceptual_map::PerceptualMapParams).
+  bool place_views_by_pose = true;
   // Key frames at one stop that make a perceptual-map view; 0 = automatic (1 until the head
   // is seen panning at a stop, then 2: only panning stops make views).
   int view_min_key_frames = 0;

@@ -22,6 +22,8 @@ mobile_mapping::MobileMapperParams MakeMapperParams(
   mobile_mapping::MobileMapperParams p;
   p.visual_heading = s.visual_heading;
   p.map_correlation = s.map_correlation;
+  p.odometry_drift_per_m = s.odometry_drift_per_m;
+  p.perceptual.place_by_pose = s.place_views_by_pose;
   p.view_min_key_frames = s.view_min_key_frames;
   p.max_odometry_step_m = s.max_odometry_step_m;
   p.max_odometry_step_rad = s.max_odometry_step_rad;

@@ -72,6 +72,17 @@ TEST(ServiceConfig, MapsSectionIsReadAndChecked) {
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("maps.view_min_key_frames"), std::string::npos);
   }
+  mapping::ApplyYaml("maps:\n  odometry_drift_per_m: 0\n  place_views_by_pose: false\n", c);
+  EXPECT_EQ(c.maps.odometry_drift_per_m, 0.0);
+  EXPECT_FALSE(c.maps.place_views_by_pose);
+  ServiceConfig e;
+  e.maps.odometry_drift_per_m = -0.01;
+  try {
+    e.Validate();
+    FAIL() << "a negative odometry drift must be refused";
+  } catch (const std::invalid_argument& ex) {
+    EXPECT_NE(std::string(ex.what()).find("maps.odometry_drift_per_m"), std::string::npos);
+  }
   ServiceConfig d;
   d.maps.max_odometry_step_m = -1;
   EXPECT_THROW(d.Validate(), std::invalid_argument);

@@ -301,8 +301,8 @@ TEST_F(MobileMapperTest, AStopWithNoEdgesIsCountedNotFatal) {
 }
 
 // The correlation's Kalman filter (odometry_drift_per_m > 0): trusting odometry (a tiny drift)
-// leaves the poses where the run without any correlation puts them; with the default 0 the
-// shifts are taken whole, as before the filter existed.
+// leaves the poses where the run without any correlation puts them; with 0 the shifts are
+// taken whole (paper 002).
 TEST_F(MobileMapperTest, TheCorrelationFilterWeighsShiftsAgainstOdometryDrift) {
   const auto run = [](const mobile_mapping::MobileMapperParams& p) {
     MobileMapper mapper(testing::BumblebeeLikeCamera(), p);
@@ -311,6 +311,7 @@ TEST_F(MobileMapperTest, TheCorrelationFilterWeighsShiftsAgainstOdometryDrift) {
     return mapper.Snapshot();
   };
   auto p = Params();
+  p.odometry_drift_per_m = 0;
   const auto whole = run(p);
   ASSERT_GT(whole->counters.shifts_applied, 0u);  // the correlation moves this run
   p.map_correlation = false;

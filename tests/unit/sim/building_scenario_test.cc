@@ -111,6 +111,29 @@ TEST_P(BuildingRoutes, RouteStopsToLookAroundAndOdometryDrifts) {
   EXPECT_GT(position_error, 0.5);
 }
 
+// --odometry-scale-error: the encoders count wheels (1 + E_s) larger than they are, so the
+// dead-reckoned path is that much shorter than the true one (exact otherwise: no noise).
+TEST(BuildingScenario, OdometryScaleErrorShortensTheCountedPath) {
+  ScenarioOptions o = Building(false);
+  o.width = 32;
+  o.height = 24;
+  o.frames = 400;
+  o.odometry_scale_error = 0.01;
+  const auto s = MakeScenario(o);
+  double true_length = 0, counted_length = 0;
+  SimFrame previous = s->Render(0);
+  for (int i = 1; i < s->frame_count(); ++i) {
+    const SimFrame f = s->Render(i);
+    true_length +=
+        std::hypot(f.gt_base->x - previous.gt_base->x, f.gt_base->y - previous.gt_base->y);
+    counted_length +=
+        std::hypot(f.odometry->x - previous.odometry->x, f.odometry->y - previous.odometry->y);
+    previous = f;
+  }
+  ASSERT_GT(true_length, 5.0);
+  EXPECT_NEAR(counted_length * 1.01, true_length, 1e-6);
+}
+
 // The robot (a 0.25 m radius around its centre) never drives through a wall, a door frame or
 // the furniture: each route passes its doors clear of what stands near them.
 TEST_P(BuildingRoutes, TheRobotKeepsClearOfWallsAndFurniture) {

@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <limits>
+
 #include "clients/sim/scenario.h"
 
 namespace epmap::sim {
@@ -60,6 +62,14 @@ TEST(ScenarioOptions, BadInputIsRefusedWithTheReason) {
   o.encoder_noise_scale = -1;
   EXPECT_NE(ErrorOf(o).find(">= 0"), std::string::npos);
   o.encoder_noise_scale = 1;
+  o.odometry_scale_error = 0.01;
+  EXPECT_NE(ErrorOf(o).find("--odometry-scale-error applies to the building scenario only"),
+            std::string::npos);
+  o.odometry_scale_error = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_NE(ErrorOf(o).find("within +-0.2"), std::string::npos);
+  o.odometry_scale_error = 0.5;
+  EXPECT_NE(ErrorOf(o).find("within +-0.2"), std::string::npos);
+  o.odometry_scale_error = 0;
   o.supersample = 2;
   EXPECT_NE(ErrorOf(o).find("must be odd"), std::string::npos);
   o.supersample = 9;
