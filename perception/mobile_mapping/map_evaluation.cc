@@ -196,21 +196,19 @@ GridScore ScoreGrid(const occupancy::GridExport& g, const std::vector<Segment2>&
   if (n == 0 || g.occupancy.size() != n) return score;
   const std::vector<uint8_t> wall = RasteriseWalls(g, walls);
   size_t uni = 0, uni_obs = 0;
-  for (size_t i = 0; i < n; ++i) {
-    const bool known = g.occupancy[i] != occupancy::GridExport::kUnknown;
-    const bool occ = known && g.occupancy[i] >= occupied_threshold;
-    score.occupied += occ;
-    score.wall_cells += wall[i];
-    score.wall_cells_observed += wall[i] && known;
-    score.intersection += occ && wall[i];
-    uni += occ || wall[i];
-    uni_obs += occ || (wall[i] && known);
-  }
   for (uint32_t r = 0; r < g.height; ++r) {
     for (uint32_t c = 0; c < g.width; ++c) {
       const size_t i = static_cast<size_t>(r) * g.width + c;
       const bool known = g.occupancy[i] != occupancy::GridExport::kUnknown;
-      if (!known || g.occupancy[i] < occupied_threshold || wall[i]) continue;
+      const bool occ = known && g.occupancy[i] >= occupied_threshold;
+      score.occupied += occ;
+      score.wall_cells += wall[i];
+      score.wall_cells_observed += wall[i] && known;
+      score.intersection += occ && wall[i];
+      uni += occ || wall[i];
+      uni_obs += occ || (wall[i] && known);
+      if (!occ || wall[i]) continue;
+      // A false positive: does it touch a wall cell?
       bool beside = false;
       for (uint32_t rr = r > 0 ? r - 1 : 0; rr <= std::min(r + 1, g.height - 1) && !beside; ++rr) {
         for (uint32_t cc = c > 0 ? c - 1 : 0; cc <= std::min(c + 1, g.width - 1); ++cc) {
