@@ -631,6 +631,7 @@ int RunCommand(int argc, char** argv) {
   double refine_disparity = 0;
   double occupied_depth = -1;
   double grid_prior = -1;
+  double grid_gap = -1, grid_gap_min = -1, grid_weight_exponent = -1;
   double grid_max_range = -1;
   double min_shift = -1;
   double odometry_drift = -1;
@@ -660,6 +661,15 @@ int RunCommand(int argc, char** argv) {
   app.add_option("--grid-prior", grid_prior,
                  "occupancy grid: weight of the prior in the ray frequencies "
                  "(MeasurementParams::frequency_prior; default: the mapper's)");
+  app.add_option("--grid-gap", grid_gap,
+                 "occupancy grid: a ray stops clearing this many range sigmas before its point "
+                 "(MeasurementParams::empty_gap_sigmas; default: the mapper's)");
+  app.add_option("--grid-gap-min", grid_gap_min,
+                 "occupancy grid: ... and at least this share of a cell before it "
+                 "(MeasurementParams::empty_gap_min_cells; default: the mapper's)");
+  app.add_option("--grid-weight-exponent", grid_weight_exponent,
+                 "occupancy grid: a point weighs min(1, (resolution / range sigma)^E) "
+                 "(MeasurementParams::weight_exponent; default: the mapper's)");
   app.add_option("--min-shift", min_shift,
                  "map correlation: smallest correction applied, m "
                  "(MobileMapperParams::correlation_min_shift_m; default: the mapper's)");
@@ -699,6 +709,9 @@ int RunCommand(int argc, char** argv) {
     if (occupied_depth >= 0) params.measurement.occupied_depth_m = occupied_depth;
     if (grid_prior >= 0) params.measurement.frequency_prior = grid_prior;
     if (grid_max_range >= 0) params.measurement.max_range_m = grid_max_range;
+    if (grid_gap >= 0) params.measurement.empty_gap_sigmas = grid_gap;
+    if (grid_weight_exponent >= 0) params.measurement.weight_exponent = grid_weight_exponent;
+    if (grid_gap_min >= 0) params.measurement.empty_gap_min_cells = grid_gap_min;
     if (min_shift >= 0) params.correlation_min_shift_m = min_shift;
     if (odometry_drift >= 0) params.odometry_drift_per_m = odometry_drift;
 
@@ -791,7 +804,8 @@ int RunCommand(int argc, char** argv) {
     cv::imwrite((fs::path(out_dir) / "grid.png").string(), GridPicture(grid_export, truth, poses));
     if (!truth.walls.empty()) {
       cv::imwrite((fs::path(out_dir) / "grid_errors.png").string(),
-                  epmap::mobile_mapping::GridErrorPicture(grid_export, truth.walls));
+                  epmap::mobile_mapping::GridErrorPicture(grid_export, truth.walls, 65, 4,
+                                                          truth.furniture));
     }
     cv::imwrite((fs::path(out_dir) / "pmap.png").string(),
                 PmapPicture(maps.perceptual, truth, true_path));
@@ -956,8 +970,17 @@ int RunCommand(int argc, char** argv) {
     j << ",\"occupancy\":{\"resolution_m\":" << FormatFixed(grid_export.resolution_m, 3)
       << ",\"width\":" << grid_export.width << ",\"height\":" << grid_export.height
       << ",\"layers\":" << grid_export.layer_count;
-    if (!truth.walls.empty())
+    if (!truth.walls.empty()) {
       j << ",\"corrected\":" << grid_score(grid_export) << ",\"iou_target\":0.5";
+      // The same at other occupied thresholds (grid.yaml's occupied_thresh is 0.65).
+      j << ",\"iou_by_occupied_threshold\":{";
+      for (const int t : {55, 65, 75, 85, 95}) {
+        const auto s =
+            epmap::mobile_mapping::ScoreGrid(grid_export, truth.walls, static_cast<uint8_t>(t));
+        j << (t == 55 ? "" : ",") << "\"" << t << "\":" << FormatFixed(s.iou, 4);
+      }
+      j << "}";
+    }
     if (!truth.furniture.empty()) {
       // The same against walls and the furniture footprints the dataset lists.
       auto solid = truth.walls;

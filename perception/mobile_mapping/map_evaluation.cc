@@ -167,15 +167,16 @@ std::vector<uint8_t> RasteriseWalls(const occupancy::GridExport& g,
   // a cell boundary marks the cells on both sides, as either could hold its surface).
   std::vector<uint8_t> wall(n, 0);
   const double res = g.resolution_m;
+  const auto cell_range = [&](double lo, double hi, double origin, uint32_t size) {
+    return std::pair(std::max(0L, static_cast<long>(std::floor((lo - origin) / res)) - 1),
+                     std::min(static_cast<long>(size) - 1,
+                              static_cast<long>(std::floor((hi - origin) / res)) + 1));
+  };
   for (const auto& w : walls) {
-    const double x0 = std::min(w.a.x(), w.b.x()), x1 = std::max(w.a.x(), w.b.x());
-    const double y0 = std::min(w.a.y(), w.b.y()), y1 = std::max(w.a.y(), w.b.y());
-    const long c0 = std::max(0L, static_cast<long>(std::floor((x0 - g.origin_x) / res)) - 1);
-    const long c1 = std::min(static_cast<long>(g.width) - 1,
-                             static_cast<long>(std::floor((x1 - g.origin_x) / res)) + 1);
-    const long r0 = std::max(0L, static_cast<long>(std::floor((y0 - g.origin_y) / res)) - 1);
-    const long r1 = std::min(static_cast<long>(g.height) - 1,
-                             static_cast<long>(std::floor((y1 - g.origin_y) / res)) + 1);
+    const auto [c0, c1] =
+        cell_range(std::min(w.a.x(), w.b.x()), std::max(w.a.x(), w.b.x()), g.origin_x, g.width);
+    const auto [r0, r1] =
+        cell_range(std::min(w.a.y(), w.b.y()), std::max(w.a.y(), w.b.y()), g.origin_y, g.height);
     for (long r = r0; r <= r1; ++r) {
       for (long c = c0; c <= c1; ++c) {
         const Eigen::Vector2d lo(g.origin_x + c * res, g.origin_y + r * res);
@@ -185,6 +186,43 @@ std::vector<uint8_t> RasteriseWalls(const occupancy::GridExport& g,
         }
       }
     }
+  }
+  // The body inside each closed outline (walls.csv and furniture.csv list each solid as
+  // consecutive segments that return to where they began): a cell lying wholly inside a 12 cm
+  // wall touches neither face but is wall all the same. Cells whose centre is inside
+  // (crossing-number test over the loop's edges).
+  for (size_t first = 0; first < walls.size();) {
+    size_t last = first;
+    while (last + 1 < walls.size() && (walls[last].b - walls[last + 1].a).norm() < 1e-6) ++last;
+    const bool closed = last > first + 1 && (walls[last].b - walls[first].a).norm() < 1e-6;
+    if (closed) {
+      double x_lo = walls[first].a.x(), x_hi = x_lo, y_lo = walls[first].a.y(), y_hi = y_lo;
+      for (size_t k = first; k <= last; ++k) {
+        x_lo = std::min(x_lo, walls[k].b.x());
+        x_hi = std::max(x_hi, walls[k].b.x());
+        y_lo = std::min(y_lo, walls[k].b.y());
+        y_hi = std::max(y_hi, walls[k].b.y());
+      }
+      const auto [c0, c1] = cell_range(x_lo, x_hi, g.origin_x, g.width);
+      const auto [r0, r1] = cell_range(y_lo, y_hi, g.origin_y, g.height);
+      for (long r = r0; r <= r1; ++r) {
+        const double y = g.origin_y + (r + 0.5) * res;
+        for (long c = c0; c <= c1; ++c) {
+          const double x = g.origin_x + (c + 0.5) * res;
+          bool inside = false;
+          for (size_t k = first; k <= last; ++k) {
+            const Eigen::Vector2d& a = walls[k].a;
+            const Eigen::Vector2d& b = walls[k].b;
+            if ((a.y() > y) != (b.y() > y) &&
+                x < a.x() + (y - a.y()) * (b.x() - a.x()) / (b.y() - a.y())) {
+              inside = !inside;
+            }
+          }
+          if (inside) wall[static_cast<size_t>(r) * g.width + static_cast<size_t>(c)] = 1;
+        }
+      }
+    }
+    first = last + 1;
   }
   return wall;
 }
@@ -237,11 +275,14 @@ GridScore ScoreGrid(const occupancy::GridExport& g, const std::vector<Segment2>&
 namespace epmap::mobile_mapping {
 
 cv::Mat GridErrorPicture(const occupancy::GridExport& g, const std::vector<Segment2>& walls,
-                         uint8_t occupied_threshold, int scale) {
+                         uint8_t occupied_threshold, int scale,
+                         const std::vector<Segment2>& furniture) {
   const size_t n = static_cast<size_t>(g.width) * g.height;
   cv::Mat img(static_cast<int>(g.height), static_cast<int>(g.width), CV_8UC3);
   if (n == 0 || g.occupancy.size() != n) return img;
   const std::vector<uint8_t> wall = RasteriseWalls(g, walls);
+  const std::vector<uint8_t> solid =
+      furniture.empty() ? std::vector<uint8_t>(n, 0) : RasteriseWalls(g, furniture);
   for (uint32_t r = 0; r < g.height; ++r) {
     auto* row = img.ptr<cv::Vec3b>(static_cast<int>(g.height - 1 - r));
     for (uint32_t c = 0; c < g.width; ++c) {
@@ -249,8 +290,10 @@ cv::Mat GridErrorPicture(const occupancy::GridExport& g, const std::vector<Segme
       const bool known = g.occupancy[i] != occupancy::GridExport::kUnknown;
       const bool occ = known && g.occupancy[i] >= occupied_threshold;
       cv::Vec3b colour = known ? cv::Vec3b(255, 255, 255) : cv::Vec3b(160, 160, 160);
-      if (occ && wall[i]) colour = cv::Vec3b(0, 170, 0);   // true positive: green
-      if (occ && !wall[i]) colour = cv::Vec3b(0, 0, 230);  // false positive: red
+      if (occ && wall[i]) colour = cv::Vec3b(0, 170, 0);  // true positive: green
+      if (occ && !wall[i]) {
+        colour = solid[i] ? cv::Vec3b(0, 220, 240) : cv::Vec3b(0, 0, 230);  // yellow / red
+      }
       if (!occ && wall[i]) {
         colour = known ? cv::Vec3b(230, 90, 0) : cv::Vec3b(240, 200, 150);  // missed: blue
       }

@@ -76,15 +76,19 @@ struct GridScore {
 // and compares them with the cells
 // whose occupancy is at or above occupied_threshold (0..100; map_server's 0.65 -> 65).
 // The walls rasterised on the grid's lattice: 1 for every cell a wall line touches (a wall along
-// a cell boundary marks the cells on both sides), row-major like the grid's bytes.
+// a cell boundary marks the cells on both sides) and every cell whose centre lies inside a
+// closed outline (consecutive segments that return to their start: a solid's body), row-major
+// like the grid's bytes.
 std::vector<uint8_t> RasteriseWalls(const occupancy::GridExport& grid,
                                     const std::vector<Segment2>& walls);
 
 // A picture of ScoreGrid's comparison (y up, `scale` px per cell): green = occupied and wall,
 // red = occupied but no wall, blue = wall seen but not occupied, light blue = wall never seen,
-// white = free, grey = unknown.
+// white = free, grey = unknown. With `furniture` (footprints, as walls): occupied cells on a
+// piece of furniture and no wall are yellow instead of red (solid, but not a wall).
 cv::Mat GridErrorPicture(const occupancy::GridExport& grid, const std::vector<Segment2>& walls,
-                         uint8_t occupied_threshold = 65, int scale = 4);
+                         uint8_t occupied_threshold = 65, int scale = 4,
+                         const std::vector<Segment2>& furniture = {});
 
 GridScore ScoreGrid(const occupancy::GridExport& grid, const std::vector<Segment2>& walls,
                     uint8_t occupied_threshold = 65);

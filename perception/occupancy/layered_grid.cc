@@ -37,8 +37,11 @@ void MeasurementParams::Validate() const {
   if (!(frequency_prior > 0) || !std::isfinite(frequency_prior)) {
     throw std::invalid_argument("occupancy measurement: frequency_prior must be > 0");
   }
-  if (!(empty_gap_sigmas >= 0)) {
+  if (!(empty_gap_sigmas >= 0) || !std::isfinite(empty_gap_sigmas)) {
     throw std::invalid_argument("occupancy measurement: empty_gap_sigmas must be >= 0");
+  }
+  if (!(empty_gap_min_cells >= 0) || !std::isfinite(empty_gap_min_cells)) {
+    throw std::invalid_argument("occupancy measurement: empty_gap_min_cells must be >= 0");
   }
   if (!(occupied_depth_m >= 0) || !std::isfinite(occupied_depth_m)) {
     throw std::invalid_argument("occupancy measurement: occupied_depth_m must be >= 0 and finite");
@@ -200,7 +203,7 @@ bool LayeredGrid::AddPoint(const Eigen::Vector3d& origin, const Eigen::Vector3d&
   const double res = params_.resolution_m;
   const double sigma = std::max(range_sigma_m, 1e-6);
   const double weight = std::min(1.0, std::pow(res / sigma, mp.weight_exponent));
-  const double gap = std::max(mp.empty_gap_sigmas * sigma, res);
+  const double gap = std::max(mp.empty_gap_sigmas * sigma, mp.empty_gap_min_cells * res);
 
   const double behind = mp.occupied_depth_m;
   const Eigen::Vector2d beyond = p + (p - o) * (behind / horizontal);

@@ -55,6 +55,8 @@ struct MeasurementParams {
   // cell), so the point's own uncertainty never clears it. With kRayFrequency the passes a
   // noisy point's neighbours get are outweighed by the hits, so the gap can be smaller.
   double empty_gap_sigmas = 1.0;
+  // ... and at least this share of a cell before it.
+  double empty_gap_min_cells = 1.0;
   // A point also marks occupied the cells behind it along the ray up to this far (in the plane,
   // at its height): the body of the surface it lies on. 0 marks the point's cell only.
   double occupied_depth_m = 0.0;

@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "perception/mobile_mapping/map_evaluation.h"
@@ -110,6 +111,41 @@ TEST(MapEvaluation, GridIouAgainstRasterisedWalls) {
   EXPECT_NEAR(s.recall_observed, 6.0 / 8, 1e-12);  // 6 of the 8 known wall cells occupied
   // A wall exactly on a cell boundary touches the cells on both sides.
   EXPECT_EQ(mobile_mapping::ScoreGrid(g, {{{0.05, 0.5}, {0.15, 0.5}}}).wall_cells, 4u);
+}
+
+TEST(MapEvaluation, RasterisedSolidsIncludeTheirBody) {
+  occupancy::GridExport g;
+  g.resolution_m = 0.1;
+  g.width = 10;
+  g.height = 10;
+  g.occupancy.assign(100, 0);
+  g.confidence.assign(100, 200);
+  // A 12 cm wall along y, faces at x = 0.39 and 0.51, from y = 0.25 to 0.75 as a closed outline
+  // (as walls.csv lists it): column 4 ([0.4, 0.5)) touches neither face but is inside.
+  const std::vector<Segment2> slab = {{{0.39, 0.25}, {0.39, 0.75}},
+                                      {{0.39, 0.75}, {0.51, 0.75}},
+                                      {{0.51, 0.75}, {0.51, 0.25}},
+                                      {{0.51, 0.25}, {0.39, 0.25}}};
+  const auto cells = mobile_mapping::RasteriseWalls(g, slab);
+  for (int r = 2; r <= 7; ++r) {
+    EXPECT_EQ(cells[static_cast<size_t>(r * 10 + 3)], 1) << "face cell, row " << r;
+    EXPECT_EQ(cells[static_cast<size_t>(r * 10 + 4)], 1) << "body cell, row " << r;
+    EXPECT_EQ(cells[static_cast<size_t>(r * 10 + 5)], 1) << "face cell, row " << r;
+  }
+  EXPECT_EQ(cells[static_cast<size_t>(5 * 10 + 2)], 0);
+  EXPECT_EQ(cells[static_cast<size_t>(5 * 10 + 6)], 0);
+  EXPECT_EQ(std::count(cells.begin(), cells.end(), 1), 3 * 6);
+  // The same segments out of order are no outline: only the faces.
+  const std::vector<Segment2> open = {slab[0], slab[2], slab[1], slab[3]};
+  const auto faces = mobile_mapping::RasteriseWalls(g, open);
+  EXPECT_EQ(faces[static_cast<size_t>(5 * 10 + 4)], 0);
+  // A 1 m x 0.6 m footprint (a desk): all 10 x 6 cells inside, plus the cells its edges touch.
+  const std::vector<Segment2> desk = {{{0.0, 0.0}, {1.0, 0.0}},
+                                      {{1.0, 0.0}, {1.0, 0.6}},
+                                      {{1.0, 0.6}, {0.0, 0.6}},
+                                      {{0.0, 0.6}, {0.0, 0.0}}};
+  const auto d = mobile_mapping::RasteriseWalls(g, desk);
+  EXPECT_EQ(std::count(d.begin(), d.end(), 1), 10 * 7);  // rows 0-6 (y = 0.6 touches row 6)
 }
 
 }  // namespace

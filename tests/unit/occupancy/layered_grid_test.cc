@@ -324,6 +324,26 @@ TEST(LayeredGrid, OccupiedDepthMarksTheBodyBehindAPoint) {
   }
 }
 
+TEST(LayeredGrid, TheEmptyGapBeforeAPointHasAFloorInCells) {
+  occupancy::MeasurementParams mp;
+  // A precise point (sigma 1 cm) 5 cm into its cell: by default the ray stops clearing a whole
+  // cell before it, so the cell in front (29) gets no pass ...
+  LayeredGrid whole_cell;
+  ASSERT_TRUE(whole_cell.AddPoint({0.05, 0.05, 1.0}, {3.05, 0.05, 1.0}, 0.01, mp));
+  EXPECT_GT(whole_cell.At(1, 28, 0).empty, 0.0F);
+  EXPECT_EQ(whole_cell.At(1, 29, 0).empty, 0.0F);
+  // ... without the floor, one sigma before it: cell 29 is left 5 cm before the point.
+  mp.empty_gap_min_cells = 0;
+  LayeredGrid sigma_only;
+  ASSERT_TRUE(sigma_only.AddPoint({0.05, 0.05, 1.0}, {3.05, 0.05, 1.0}, 0.01, mp));
+  EXPECT_GT(sigma_only.At(1, 29, 0).empty, 0.0F);
+  EXPECT_EQ(sigma_only.At(1, 30, 0).empty, 0.0F);  // never the point's own cell
+  for (const double bad : {-0.5, std::numeric_limits<double>::quiet_NaN()}) {
+    mp.empty_gap_min_cells = bad;
+    EXPECT_THROW(mp.Validate(), std::invalid_argument) << bad;
+  }
+}
+
 TEST(LayeredGrid, BadParametersAreRefused) {
   EXPECT_THROW(LayeredGrid(occupancy::GridParams{0.0, {0.1, 1.0}, 1.0}), std::invalid_argument);
   EXPECT_THROW(LayeredGrid(occupancy::GridParams{0.1, {1.0, 0.1}, 1.0}), std::invalid_argument);
