@@ -623,7 +623,7 @@ int RunCommand(int argc, char** argv) {
                argv[0]);
   std::string dataset_path, out_dir, compare_path;
   bool json = false, no_variants = false, no_motion_mask = false, no_map_correlation = false;
-  bool place_by_common_objects = false;
+  bool place_by_common_objects = false, no_grid_features = false;
   bool reject_contested = false;
   double floor_z = 0.0;
   int view_min = 0;
@@ -689,6 +689,9 @@ int RunCommand(int argc, char** argv) {
                "perceptual map: place each view's new objects from the nearest common object "
                "(paper 003 Sec. III-C) instead of by the corrected pose (PerceptualMapParams::"
                "place_by_pose off)");
+  app.add_flag("--no-grid-features", no_grid_features,
+               "occupancy grid: edge points only, not the corner features tracked for the heading "
+               "(MobileMapperParams::occupancy_feature_points off)");
   app.add_flag("--no-motion-mask", no_motion_mask,
                "do not run the EP before the maps (epmapd leaves what the EP finds moving on its "
                "own out of the maps)");
@@ -704,6 +707,7 @@ int RunCommand(int argc, char** argv) {
     if (min_tracked != 0) params.perceptual.min_tracked = min_tracked;  // validated there
     params.edges.refine_disparity_px = refine_disparity;
     params.map_correlation = !no_map_correlation;
+    if (no_grid_features) params.occupancy_feature_points = false;
     if (place_by_common_objects) params.perceptual.place_by_pose = false;
     params.edges.reject_contested = reject_contested;
     if (occupied_depth >= 0) params.measurement.occupied_depth_m = occupied_depth;

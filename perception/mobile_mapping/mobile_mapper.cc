@@ -219,6 +219,7 @@ KeyFrameReport MobileMapper::AddKeyFrame(const KeyFrame& f) {
   }
   report.reference_points = frame.reference_points.size();
   for (const auto& s : features.features) {
+    if (!params_.occupancy_feature_points) break;
     frame.points_base.push_back(f.T_base_cam * s.p_cam);
     frame.sigmas.push_back(localisation::DepthSigma(camera_, s.p_cam.z(),
                                                     params_.features.disparity_sigma_px,

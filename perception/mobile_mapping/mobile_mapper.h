@@ -103,6 +103,9 @@ struct MobileMapperParams {
   // ... and only edges this close to vertical (|dI/dy| <= slope |dI/dx|): a slanted edge's
   // disparity is less precise, which a 10 cm grid shows where a line map does not.
   double occupancy_edge_max_slope = 1.0;
+  // The corner features tracked for the heading go to the grid as points too. They are most of
+  // its wall evidence: without them, rooms route grid IoU 0.390 -> 0.102 (README).
+  bool occupancy_feature_points = true;
 
   bool visual_heading = true;  // paper 002, Sec. 3.3; off: the odometry's heading is kept
   // Fit only the rotation of a key-frame step, its translation taken from the odometry
