@@ -624,6 +624,7 @@ int RunCommand(int argc, char** argv) {
   std::string dataset_path, out_dir, compare_path;
   bool json = false, no_variants = false, no_motion_mask = false, no_map_correlation = false;
   bool place_by_common_objects = false, no_grid_features = false;
+  int max_features = 0;
   bool reject_contested = false;
   double floor_z = 0.0;
   int view_min = 0;
@@ -692,6 +693,9 @@ int RunCommand(int argc, char** argv) {
   app.add_flag("--no-grid-features", no_grid_features,
                "occupancy grid: edge points only, not the corner features tracked for the heading "
                "(MobileMapperParams::occupancy_feature_points off)");
+  app.add_option("--max-features", max_features,
+                 "Shi-Tomasi corners per key frame, for the heading and the grid "
+                 "(StereoFeatureParams::max_features; default: the mapper's)");
   app.add_flag("--no-motion-mask", no_motion_mask,
                "do not run the EP before the maps (epmapd leaves what the EP finds moving on its "
                "own out of the maps)");
@@ -708,6 +712,7 @@ int RunCommand(int argc, char** argv) {
     params.edges.refine_disparity_px = refine_disparity;
     params.map_correlation = !no_map_correlation;
     if (no_grid_features) params.occupancy_feature_points = false;
+    if (max_features > 0) params.features.max_features = max_features;
     if (place_by_common_objects) params.perceptual.place_by_pose = false;
     params.edges.reject_contested = reject_contested;
     if (occupied_depth >= 0) params.measurement.occupied_depth_m = occupied_depth;

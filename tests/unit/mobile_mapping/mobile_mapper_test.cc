@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -112,6 +113,25 @@ TEST_F(MobileMapperTest, BuildsBothMapsAndCorrectsTheHeading) {
   const auto grid = snap->grid.Export();
   EXPECT_GT(mobile_mapping::ScoreGrid(grid, walls).intersection, 50u);
   EXPECT_GE(snap->perceptual.path.size(), 3u);
+}
+
+// The corner features tracked for the heading are points of the grid too; without them the
+// grid knows only what the edge points saw.
+TEST_F(MobileMapperTest, TheCornerFeaturesAreGridEvidence) {
+  const auto known_cells = [](bool features) {
+    auto p = Params();
+    p.occupancy_feature_points = features;
+    MobileMapper mapper(testing::BumblebeeLikeCamera(), p);
+    // The first third of the run (its first stops) is enough, and keeps the test fast.
+    for (size_t k = 0; k < frames_->size() / 3; ++k) mapper.AddKeyFrame((*frames_)[k]);
+    mapper.Flush();
+    const auto grid = mapper.Snapshot()->grid.Export();
+    return std::count_if(grid.occupancy.begin(), grid.occupancy.end(),
+                         [](uint8_t v) { return v != occupancy::GridExport::kUnknown; });
+  };
+  const auto with = known_cells(true), without = known_cells(false);
+  EXPECT_GT(without, 0);
+  EXPECT_GT(with, without);
 }
 
 // view_min_key_frames = 0 (the service's setting): this run pans at its stops, so once it has
