@@ -328,11 +328,12 @@ void MobileMapper::MergeGroup(const Group& group, MapsState state, KeyFrameRepor
       const bool take_y = sharp_y && (reg.dy_cells == 0 || gain);
       const Eigen::Vector2d measured(take_x ? reg.dx_m : 0.0, take_y ? reg.dy_m : 0.0);
       // Kalman update per axis that measured anything: how much of the shift to believe.
+      // Without a drift model (odometry_drift_per_m 0) the whole measured shift is taken.
+      const bool filtered = params_.odometry_drift_per_m > 0;
       const double r = params_.correlation_sigma_m * params_.correlation_sigma_m;
       Eigen::Vector2d kalman_gain = Eigen::Vector2d::Zero();
       for (int a = 0; a < 2; ++a) {
         const double p = state.filter.variance[a];
-        const bool filtered = params_.odometry_drift_per_m > 0;
         if (a == 0 ? take_x : take_y) kalman_gain[a] = filtered ? p / (p + r) : 1.0;
       }
       const Eigen::Vector2d shift = kalman_gain.cwiseProduct(measured);
@@ -343,7 +344,7 @@ void MobileMapper::MergeGroup(const Group& group, MapsState state, KeyFrameRepor
             (Eigen::Vector2d::Ones() - kalman_gain).cwiseProduct(state.filter.variance);
         // The local map is merged shifted by the whole cells of what was applied.
         const double res = state.grid.resolution();
-        const bool whole = params_.odometry_drift_per_m <= 0;
+        const bool whole = !filtered;
         sx = take_x ? (whole ? reg.dx_cells : static_cast<int>(std::lround(shift.x() / res))) : 0;
         sy = take_y ? (whole ? reg.dy_cells : static_cast<int>(std::lround(shift.y() / res))) : 0;
         report->shifted = true;
