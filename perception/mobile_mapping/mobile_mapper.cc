@@ -344,9 +344,10 @@ void MobileMapper::MergeGroup(const Group& group, MapsState state, KeyFrameRepor
             (Eigen::Vector2d::Ones() - kalman_gain).cwiseProduct(state.filter.variance);
         // The local map is merged shifted by the whole cells of what was applied.
         const double res = state.grid.resolution();
-        const bool whole = !filtered;
-        sx = take_x ? (whole ? reg.dx_cells : static_cast<int>(std::lround(shift.x() / res))) : 0;
-        sy = take_y ? (whole ? reg.dy_cells : static_cast<int>(std::lround(shift.y() / res))) : 0;
+        sx =
+            take_x ? (filtered ? static_cast<int>(std::lround(shift.x() / res)) : reg.dx_cells) : 0;
+        sy =
+            take_y ? (filtered ? static_cast<int>(std::lround(shift.y() / res)) : reg.dy_cells) : 0;
         report->shifted = true;
         report->shift_m = shift;
         state.poses.ApplyTranslation(shift, group.first_record);
