@@ -618,6 +618,37 @@ cv::Mat GridPicture(const epmap::occupancy::GridExport& g, const Truth& truth,
   return img;
 }
 
+// `layer` (one band's export, cropped to what that band knows) on `frame`'s larger extent, the
+// cells outside the band's crop unknown: scores of the bands and of the combined map then count
+// the same wall cells.
+epmap::occupancy::GridExport OnExtentOf(const epmap::occupancy::GridExport& layer,
+                                        const epmap::occupancy::GridExport& frame) {
+  epmap::occupancy::GridExport out = layer;
+  out.origin_x = frame.origin_x;
+  out.origin_y = frame.origin_y;
+  out.width = frame.width;
+  out.height = frame.height;
+  out.occupancy.assign(static_cast<size_t>(frame.width) * frame.height,
+                       epmap::occupancy::GridExport::kUnknown);
+  out.confidence.assign(out.occupancy.size(), 0);
+  const long dc = std::lround((layer.origin_x - frame.origin_x) / frame.resolution_m);
+  const long dr = std::lround((layer.origin_y - frame.origin_y) / frame.resolution_m);
+  for (uint32_t r = 0; r < layer.height; ++r) {
+    for (uint32_t c = 0; c < layer.width; ++c) {
+      const long fr = dr + r, fc = dc + c;
+      if (fr < 0 || fc < 0 || fr >= static_cast<long>(frame.height) ||
+          fc >= static_cast<long>(frame.width)) {
+        continue;
+      }
+      const size_t from = static_cast<size_t>(r) * layer.width + c;
+      const size_t to = static_cast<size_t>(fr) * frame.width + static_cast<size_t>(fc);
+      out.occupancy[to] = layer.occupancy[from];
+      out.confidence[to] = layer.confidence[from];
+    }
+  }
+  return out;
+}
+
 int RunCommand(int argc, char** argv) {
   CLI::App app("Perceptual map + occupancy grid + heading correction over a mobile-base dataset",
                argv[0]);
@@ -634,6 +665,7 @@ int RunCommand(int argc, char** argv) {
   double grid_prior = -1;
   double grid_gap = -1, grid_gap_min = -1, grid_weight_exponent = -1;
   double grid_max_range = -1;
+  double grid_resolution = 0;  // 0: the mapper's
   double min_shift = -1;
   double odometry_drift = -1;
   size_t max_frames = 1'000'000;
@@ -668,6 +700,9 @@ int RunCommand(int argc, char** argv) {
   app.add_option("--grid-gap-min", grid_gap_min,
                  "occupancy grid: ... and at least this share of a cell before it "
                  "(MeasurementParams::empty_gap_min_cells; default: the mapper's)");
+  app.add_option("--grid-resolution", grid_resolution,
+                 "occupancy grid cell size in metres (GridParams::resolution_m; default: the "
+                 "mapper's)");
   app.add_option("--grid-weight-exponent", grid_weight_exponent,
                  "occupancy grid: a point weighs min(1, (resolution / range sigma)^E) "
                  "(MeasurementParams::weight_exponent; default: the mapper's)");
@@ -718,6 +753,7 @@ int RunCommand(int argc, char** argv) {
     if (occupied_depth >= 0) params.measurement.occupied_depth_m = occupied_depth;
     if (grid_prior >= 0) params.measurement.frequency_prior = grid_prior;
     if (grid_max_range >= 0) params.measurement.max_range_m = grid_max_range;
+    if (grid_resolution != 0) params.grid.resolution_m = grid_resolution;  // validated there
     if (grid_gap >= 0) params.measurement.empty_gap_sigmas = grid_gap;
     if (grid_weight_exponent >= 0) params.measurement.weight_exponent = grid_weight_exponent;
     if (grid_gap_min >= 0) params.measurement.empty_gap_min_cells = grid_gap_min;
@@ -989,6 +1025,29 @@ int RunCommand(int argc, char** argv) {
         j << (t == 55 ? "" : ",") << "\"" << t << "\":" << FormatFixed(s.iou, 4);
       }
       j << "}";
+      // The same with cells of less confidence (kappa) than these left unknown (the export's
+      // default is 0.05), on the same extent.
+      j << ",\"iou_by_unknown_below\":{";
+      for (const double k : {0.05, 0.1, 0.2, 0.3, 0.5}) {
+        const auto s = epmap::mobile_mapping::ScoreGrid(
+            OnExtentOf(maps.grid.Export(std::nullopt, k), grid_export), truth.walls);
+        j << (k == 0.05 ? "" : ",") << "\"" << FormatFixed(k, 2)
+          << "\":{\"iou\":" << FormatFixed(s.iou, 4)
+          << ",\"precision\":" << FormatFixed(s.precision, 4)
+          << ",\"recall_observed\":" << FormatFixed(s.recall_observed, 4) << "}";
+      }
+      j << "}";
+      // Each height band alone: walls span them all, furniture only the bands it reaches
+      // (desks and chairs the lowest ones), so the bands show where the false cells come from.
+      j << ",\"by_layer\":[";
+      for (int l = 0; l < maps.grid.layer_count(); ++l) {
+        const auto& bounds = maps.grid.params().layer_bounds_m;
+        const auto layer = OnExtentOf(maps.grid.Export(l), grid_export);
+        j << (l == 0 ? "" : ",") << "{\"from_m\":" << FormatFixed(bounds[l], 2)
+          << ",\"to_m\":" << FormatFixed(bounds[l + 1], 2) << ",\"walls\":" << grid_score(layer)
+          << "}";
+      }
+      j << "]";
     }
     if (!truth.furniture.empty()) {
       // The same against walls and the furniture footprints the dataset lists.

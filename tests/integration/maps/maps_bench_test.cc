@@ -39,7 +39,9 @@ TEST(MapsBench, WritesTheMapsAndTheFigures) {
         "\"wall_coverage_0p5m\":", "\"visible_wall_share\":", "\"stray_share_1m\":", "\"iou\":",
         "\"iou_upper_bound\":", "\"wall_coverage_seen_bound\":", "\"seen_wall_coverage_0p5m\":",
         "\"no_heading_correction\":", "\"per_key_frame_ms_median\":",
-        "\"baseline_sgbm_ms_median\":", "\"correlation\":{\"enabled\":true,\"shifts_applied\":"}) {
+        "\"baseline_sgbm_ms_median\":", "\"correlation\":{\"enabled\":true,\"shifts_applied\":",
+        "\"by_layer\":[{\"from_m\":0.10,\"to_m\":0.70,\"walls\":{\"iou\":",
+        "\"iou_by_unknown_below\":{\"0.05\":{\"iou\":", "\"resolution_m\":0.100,"}) {
     EXPECT_NE(figures.find(key), std::string::npos) << key << " missing in " << figures;
   }
   EXPECT_EQ(figures.find("null"), std::string::npos) << figures;
@@ -80,6 +82,21 @@ TEST(MapsBench, WritesTheMapsAndTheFigures) {
             std::string::npos)
       << figures4;
   EXPECT_NE(figures4.find("\"registrations\":0,"), std::string::npos) << figures4;
+
+  // The grid's cell size is the bench's to choose; a nonsensical one is refused by the grid.
+  const std::string coarse = bench.string() +
+                             " maps --no-variants --grid-resolution 0.2 --dataset " +
+                             (dir / "data").string() + " --out " + (dir / "out5").string() +
+                             " --json > " + (dir / "figures5.txt").string();
+  ASSERT_EQ(std::system(coarse.c_str()), 0) << coarse;
+  EXPECT_NE(Slurp(dir / "figures5.txt").find("\"resolution_m\":0.200,"), std::string::npos)
+      << Slurp(dir / "figures5.txt");
+  const std::string negative = bench.string() + " maps --grid-resolution -0.1 --dataset " +
+                               (dir / "data").string() + " --out " + (dir / "out6").string() +
+                               " 2> " + (dir / "err6.txt").string();
+  EXPECT_NE(std::system(negative.c_str()), 0);
+  EXPECT_NE(Slurp(dir / "err6.txt").find("resolution_m must be positive"), std::string::npos)
+      << Slurp(dir / "err6.txt");
 
   // A folder that is not a mobile-base dataset is refused with a reason.
   const std::string bad = bench.string() + " maps --dataset " + dir.string() + " --out " +
