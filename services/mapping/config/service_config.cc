@@ -173,6 +173,7 @@ void Apply(const YAML::Node& root, ServiceConfig& c) {
     s.Get("visual_heading", c.maps.visual_heading);
     s.Get("map_correlation", c.maps.map_correlation);
     s.Get("odometry_drift_per_m", c.maps.odometry_drift_per_m);
+    s.Get("grid_resolution_m", c.maps.grid_resolution_m);
     s.Get("place_views_by_pose", c.maps.place_views_by_pose);
     s.Get("view_min_key_frames", c.maps.view_min_key_frames);
     s.Get("max_odometry_step_m", c.maps.max_odometry_step_m);
@@ -268,6 +269,10 @@ void ServiceConfig::Validate() const {
     if (m.view_min_key_frames < 0) bad("maps.view_min_key_frames must be >= 0 (0 = automatic)");
     if (!(m.odometry_drift_per_m >= 0) || !std::isfinite(m.odometry_drift_per_m)) {
       bad("maps.odometry_drift_per_m must be >= 0 and finite (0 = every shift taken whole)");
+    }
+    // Finer cells multiply the ray traversal and the memory; coarser ones hide doorways.
+    if (!(m.grid_resolution_m >= 0.02 && m.grid_resolution_m <= 1.0)) {
+      bad("maps.grid_resolution_m must be between 0.02 and 1 m");
     }
     if (!(m.max_odometry_step_m > 0) || !(m.max_odometry_step_rad > 0) ||
         !(m.max_odometry_speed_mps > 0)) {
@@ -430,6 +435,7 @@ std::string ToYaml(const ServiceConfig& c) {
   out << YAML::Key << "visual_heading" << YAML::Value << c.maps.visual_heading;
   out << YAML::Key << "map_correlation" << YAML::Value << c.maps.map_correlation;
   out << YAML::Key << "odometry_drift_per_m" << YAML::Value << c.maps.odometry_drift_per_m;
+  out << YAML::Key << "grid_resolution_m" << YAML::Value << c.maps.grid_resolution_m;
   out << YAML::Key << "place_views_by_pose" << YAML::Value << c.maps.place_views_by_pose;
   out << YAML::Key << "view_min_key_frames" << YAML::Value << c.maps.view_min_key_frames;
   out << YAML::Key << "max_odometry_step_m" << YAML::Value << c.maps.max_odometry_step_m;

@@ -71,6 +71,10 @@ struct MapsSettings {
   // against it (mobile_mapping::MobileMapperParams::odometry_drift_per_m); 0 takes every
   // shift whole, as paper 002 does.
   double odometry_drift_per_m = 0.02;
+  // Cell size of the occupancy grid (occupancy::GridParams::resolution_m). 0.1 m is about the
+  // rig's depth noise at 3-4 m; coarser or finer cells did not score better against the
+  // building's walls (perception/mobile_mapping/README.md).
+  double grid_resolution_m = 0.1;
   // Perceptual-map views placed by the corrected pose; false: triangulated from the nearest
   // common object, as paper 003 Sec. III-C (perceptual_map::PerceptualMapParams).
   bool place_views_by_pose = true;

@@ -23,6 +23,7 @@ mobile_mapping::MobileMapperParams MakeMapperParams(
   p.visual_heading = s.visual_heading;
   p.map_correlation = s.map_correlation;
   p.odometry_drift_per_m = s.odometry_drift_per_m;
+  p.grid.resolution_m = s.grid_resolution_m;
   p.perceptual.place_by_pose = s.place_views_by_pose;
   p.view_min_key_frames = s.view_min_key_frames;
   p.max_odometry_step_m = s.max_odometry_step_m;

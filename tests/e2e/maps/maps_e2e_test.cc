@@ -67,7 +67,14 @@ TEST(MapsE2E, BuildingRunGivesMapsNearTheTrueWalls) {
   dataset::Dataset data;
   ASSERT_NO_FATAL_FAILURE(testing::RecordBuilding(work, kFrames, &data));
 
-  testing::Epmapd epmapd(domain, {"--urdf", data.urdf->string()}, work);
+  // A grid cell size other than the default, to see the configuration reach the grid.
+  constexpr double kGridResolution = 0.125;
+  {
+    std::ofstream config(work / "epmapd.yaml");
+    config << "maps:\n  grid_resolution_m: " << kGridResolution << "\n";
+  }
+  testing::Epmapd epmapd(
+      domain, {"--urdf", data.urdf->string(), "--config", (work / "epmapd.yaml").string()}, work);
   ASSERT_TRUE(epmapd.WaitReady()) << epmapd.process().Output();
 
   // A ROS 2 node's view: map -> odom on rt/tf as it is published (tf is volatile: listen first).
@@ -137,7 +144,7 @@ TEST(MapsE2E, BuildingRunGivesMapsNearTheTrueWalls) {
     const YAML::Node yaml = YAML::LoadFile((work / "grid.yaml").string());
     EXPECT_EQ(yaml["image"].as<std::string>(), "grid.pgm");
     const double resolution = yaml["resolution"].as<double>();
-    EXPECT_GT(resolution, 0.0);
+    EXPECT_DOUBLE_EQ(resolution, kGridResolution);
     ASSERT_EQ(yaml["origin"].size(), 3u);
     EXPECT_EQ(yaml["negate"].as<int>(), 0);
     const double occupied_thresh = yaml["occupied_thresh"].as<double>();

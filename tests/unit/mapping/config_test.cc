@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <fstream>
 
 #include "services/mapping/config/service_config.h"
@@ -83,6 +84,15 @@ TEST(ServiceConfig, MapsSectionIsReadAndChecked) {
   ServiceConfig e;
   e.maps.odometry_drift_per_m = -0.01;
   ExpectRefusedNaming(e, "maps.odometry_drift_per_m");
+  ServiceConfig fine;
+  mapping::ApplyYaml("maps:\n  grid_resolution_m: 0.05\n", fine);
+  EXPECT_DOUBLE_EQ(fine.maps.grid_resolution_m, 0.05);
+  EXPECT_NO_THROW(fine.Validate());
+  for (const double bad : {0.0, -0.1, 0.01, 2.0, std::nan("")}) {
+    ServiceConfig g;
+    g.maps.grid_resolution_m = bad;
+    ExpectRefusedNaming(g, "maps.grid_resolution_m");
+  }
   ServiceConfig d;
   d.maps.max_odometry_step_m = -1;
   EXPECT_THROW(d.Validate(), std::invalid_argument);
