@@ -342,6 +342,8 @@ ServiceConfig LoadServiceConfig(const std::filesystem::path& yaml_path) {
 
 std::string ToYaml(const ServiceConfig& c) {
   YAML::Emitter out;
+  // 15 significant digits: 0.1 reads back as 0.1, not as 0.10000000000000001.
+  out.SetDoublePrecision(15);
   out << YAML::BeginMap;
   out << YAML::Key << "api" << YAML::Value << YAML::BeginMap << YAML::Key << "listen" << YAML::Value
       << c.listen << YAML::Key << "max_message_mb" << YAML::Value << c.max_message_mb
