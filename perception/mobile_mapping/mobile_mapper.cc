@@ -43,8 +43,8 @@ void MobileMapperParams::Validate() const {
   if (!(odometry_drift_per_m >= 0) || !std::isfinite(odometry_drift_per_m)) {
     throw std::invalid_argument("mobile mapper: odometry_drift_per_m must be >= 0 and finite");
   }
-  if (!(correlation_sigma_m > 0) || !std::isfinite(correlation_sigma_m)) {
-    throw std::invalid_argument("mobile mapper: correlation_sigma_m must be > 0 and finite");
+  if (!(correlation_sigma_cells > 0) || !std::isfinite(correlation_sigma_cells)) {
+    throw std::invalid_argument("mobile mapper: correlation_sigma_cells must be > 0 and finite");
   }
   if (!std::isfinite(floor_z_in_base_m)) {
     throw std::invalid_argument("mobile mapper: floor_z_in_base_m must be finite");
@@ -330,7 +330,8 @@ void MobileMapper::MergeGroup(const Group& group, MapsState state, KeyFrameRepor
       // Kalman update per axis that measured anything: how much of the shift to believe.
       // Without a drift model (odometry_drift_per_m 0) the whole measured shift is taken.
       const bool filtered = params_.odometry_drift_per_m > 0;
-      const double r = params_.correlation_sigma_m * params_.correlation_sigma_m;
+      const double sigma = params_.correlation_sigma_cells * state.grid.resolution();
+      const double r = sigma * sigma;
       Eigen::Vector2d kalman_gain = Eigen::Vector2d::Zero();
       for (int a = 0; a < 2; ++a) {
         const double p = state.filter.variance[a];

@@ -140,7 +140,9 @@ struct MobileMapperParams {
   // odometry that under-counts the distance by 1 %, 10.4 cm whole, 8.7 cm filtered, 12.8 cm
   // without any correlation (perception/mobile_mapping/README.md). Set it to the base's own
   // drift; 0.02 is a wheeled base's usual 1-5 %'s lower end.
-  double correlation_sigma_m = 0.03;   // noise of one shift: parabola peak on a 0.1 m lattice
+  // Noise of one shift, in cells: the parabola through the peak places it to about a third of
+  // a cell (3 cm on the default 0.1 m lattice), so it scales with grid.resolution_m.
+  double correlation_sigma_cells = 0.3;
   double odometry_drift_per_m = 0.02;  // 0: every shift taken whole (paper 002)
 
   // Groups of fewer key frames are not views (2+: only panning stops make views; 1: every
@@ -253,7 +255,7 @@ class MobileMapper {
     std::vector<FramePoints> frames;
   };
 
-  // The correlation's Kalman filter (MobileMapperParams::correlation_sigma_m): variance of
+  // The correlation's Kalman filter (MobileMapperParams::correlation_sigma_cells): variance of
   // the position error along world x and y, and where the last stop stood.
   struct PositionFilter {
     Eigen::Vector2d variance = Eigen::Vector2d::Zero();

@@ -358,7 +358,7 @@ TEST(MobileMapper, BadConfigurationIsRefused) {
   p.odometry_drift_per_m = -0.01;
   EXPECT_THROW(MobileMapper(cam, p), std::invalid_argument);
   p = {};
-  p.correlation_sigma_m = 0;
+  p.correlation_sigma_cells = 0;
   EXPECT_THROW(MobileMapper(cam, p), std::invalid_argument);
   cam.baseline_m = 0;
   EXPECT_THROW(MobileMapper(cam, {}), std::invalid_argument);
