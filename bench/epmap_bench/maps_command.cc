@@ -1040,8 +1040,8 @@ int RunCommand(int argc, char** argv) {
       // Each height band alone: walls span them all, furniture only the bands it reaches
       // (desks and chairs the lowest ones), so the bands show where the false cells come from.
       j << ",\"by_layer\":[";
+      const auto& bounds = maps.grid.params().layer_bounds_m;
       for (int l = 0; l < maps.grid.layer_count(); ++l) {
-        const auto& bounds = maps.grid.params().layer_bounds_m;
         const auto layer = OnExtentOf(maps.grid.Export(l), grid_export);
         j << (l == 0 ? "" : ",") << "{\"from_m\":" << FormatFixed(bounds[l], 2)
           << ",\"to_m\":" << FormatFixed(bounds[l + 1], 2) << ",\"walls\":" << grid_score(layer)
