@@ -7,10 +7,12 @@
 # --no-map-correlation or --reject-contested. --route rooms records the route that steps into
 # seven of the eight rooms (epmap-sim --route) instead of the default corridors route.
 # --odometry-scale-error E records odometry that under-counts the distance by E (epmap-sim's
-# option of that name; the datasets and outputs get an -se<E> suffix).
+# option of that name; the datasets and outputs get an -se<E> suffix). --true-depth records
+# the true disparity of every frame and gives the maps their points' true depths (epmap-bench
+# maps --true-depth: what the stereo's depth error costs; datasets and outputs get -td).
 #
 #   scripts/building-maps.sh [--work DIR] [--tag NAME] [--route corridors|rooms]
-#                            [--odometry-scale-error E] [-- BENCH ARGS...]
+#                            [--odometry-scale-error E] [--true-depth] [-- BENCH ARGS...]
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -18,14 +20,16 @@ WORK=building-maps
 TAG=default
 ROUTE=corridors
 SCALE_ERROR=
+TRUE_DEPTH=
 while [ $# -gt 0 ]; do
   case "$1" in
     --work) WORK="$2"; shift 2 ;;
     --tag) TAG="$2"; shift 2 ;;
     --route) ROUTE="$2"; shift 2 ;;
     --odometry-scale-error) SCALE_ERROR="$2"; shift 2 ;;
+    --true-depth) TRUE_DEPTH=1; shift ;;
     --) shift; break ;;
-    -h|--help) sed -n '2,13p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,16p' "$0"; exit 0 ;;
     *) echo "building-maps.sh: unknown argument $1 (bench arguments go after --)" >&2; exit 2 ;;
   esac
 done
@@ -44,6 +48,12 @@ if [ -n "$SCALE_ERROR" ]; then
   DATA="$DATA-se$SCALE_ERROR"; TAG="$TAG-se$SCALE_ERROR"
   SIM_ARGS=(--odometry-scale-error "$SCALE_ERROR")
 fi
+BENCH_ARGS=()
+if [ -n "$TRUE_DEPTH" ]; then
+  DATA="$DATA-td"; TAG="$TAG-td"
+  SIM_ARGS+=(--disparity-every-frame)
+  BENCH_ARGS=(--true-depth)
+fi
 mkdir -p "$WORK"
 for run in "${RUNS[@]}"; do
   if [ ! -d "$WORK/$DATA-$run/mav0" ]; then
@@ -57,7 +67,7 @@ done
 bench() {
   local run=$1; shift
   "$BIN/epmap-bench" maps --dataset "$WORK/$DATA-$run" --out "$WORK/$TAG-$run" --json \
-    --no-variants "$@" > "$WORK/$TAG-$run.json" 2> "$WORK/$TAG-$run.log"
+    --no-variants "${BENCH_ARGS[@]}" "$@" > "$WORK/$TAG-$run.json" 2> "$WORK/$TAG-$run.log"
 }
 for pair in "fwd rev" "s7 s11"; do
   pids=()

@@ -74,7 +74,26 @@ struct Prepared {
   size_t frames_without_odometry = 0;
   size_t frames_without_joints = 0;
   bool panning_stops = false;
+  // --true-depth: the map points take their depth from gt_disparity0 (KeyFrame::true_disparity).
+  bool true_depth = false;
 };
+
+// --true-depth needs the true disparity of every key frame in the rectified left image.
+void CheckTrueDepth(const Prepared& p) {
+  if (p.rectifier) {
+    throw std::runtime_error(
+        "--true-depth: gt_disparity0 is only defined for rigs whose images are already "
+        "rectified");
+  }
+  for (const auto& f : p.key_frames) {
+    const int64_t t = p.data.frames[f.index].stamp_ns;
+    if (!p.data.gt_disparity.count(t)) {
+      throw std::runtime_error("--true-depth: key frame " + std::to_string(t) +
+                               " has no gt_disparity0 (record with epmap-sim record "
+                               "--disparity-every-frame)");
+    }
+  }
+}
 
 Prepared Prepare(const std::string& path, size_t max_frames) {
   Prepared p;
@@ -232,6 +251,7 @@ RunResult Run(const Prepared& p, epmap::mobile_mapping::MobileMapperParams param
     if (const auto it = masks.by_frame.find(f.index); it != masks.by_frame.end()) {
       kf.moving = it->second;
     }
+    if (p.true_depth) kf.true_disparity = epmap::dataset::LoadGtDisparity(p.data, frame.stamp_ns);
     const auto t0 = std::chrono::steady_clock::now();
     out.reports.push_back(mapper.AddKeyFrame(kf));
     const auto t1 = std::chrono::steady_clock::now();
@@ -654,7 +674,7 @@ int RunCommand(int argc, char** argv) {
                argv[0]);
   std::string dataset_path, out_dir, compare_path;
   bool json = false, no_variants = false, no_motion_mask = false, no_map_correlation = false;
-  bool place_by_common_objects = false, no_grid_features = false;
+  bool place_by_common_objects = false, no_grid_features = false, true_depth = false;
   int max_features = 0;
   bool reject_contested = false;
   double floor_z = 0.0;
@@ -731,12 +751,20 @@ int RunCommand(int argc, char** argv) {
   app.add_option("--max-features", max_features,
                  "Shi-Tomasi corners per key frame, for the heading and the grid "
                  "(StereoFeatureParams::max_features; default: the mapper's)");
+  app.add_flag("--true-depth", true_depth,
+               "evaluation: the map points take their depth from gt_disparity0 (every key frame "
+               "needs one: epmap-sim record --disparity-every-frame) where it is unambiguous, to "
+               "tell what the stereo's depth error costs the maps; the heading keeps the stereo's");
   app.add_flag("--no-motion-mask", no_motion_mask,
                "do not run the EP before the maps (epmapd leaves what the EP finds moving on its "
                "own out of the maps)");
   CLI11_PARSE(app, argc, argv);
   try {
-    const Prepared p = Prepare(dataset_path, max_frames);
+    Prepared p = Prepare(dataset_path, max_frames);
+    if (true_depth) {
+      CheckTrueDepth(p);
+      p.true_depth = true;
+    }
     fs::create_directories(out_dir);
     const Truth truth = MakeTruth(p);
 
@@ -864,6 +892,7 @@ int RunCommand(int argc, char** argv) {
     j << "{\"command\":\"maps\",\"dataset\":\"" << dataset_path
       << "\",\"frames\":" << p.data.frames.size() << ",\"key_frames\":" << p.key_frames.size()
       << ",\"panning_stops\":" << (p.panning_stops ? "true" : "false")
+      << ",\"true_depth\":" << (p.true_depth ? "true" : "false")
       << ",\"camera\":{\"width\":" << p.camera.width << ",\"height\":" << p.camera.height
       << ",\"fx\":" << FormatFixed(p.camera.fx, 3)
       << ",\"baseline_m\":" << FormatFixed(p.camera.baseline_m, 5)

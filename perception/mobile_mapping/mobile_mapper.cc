@@ -32,6 +32,29 @@ cv::Mat GrowMovingMask(const cv::Mat& mask) {
   return grown;
 }
 
+std::optional<Eigen::Vector3d> TrueDepthOf(const cv::Mat& true_disparity,
+                                           const stereo::RectifiedGeometry& camera, float u,
+                                           float v) {
+  const int x = static_cast<int>(std::lround(u)), y = static_cast<int>(std::lround(v));
+  if (x < 0 || y < 0 || x >= true_disparity.cols || y >= true_disparity.rows) return {};
+  const float d = true_disparity.at<float>(y, x);
+  if (!std::isfinite(d) || d <= 0) return {};
+  float lo = d, hi = d;
+  for (int yy = std::max(0, y - kTrueDepthEdgePx);
+       yy <= std::min(true_disparity.rows - 1, y + kTrueDepthEdgePx); ++yy) {
+    for (int xx = std::max(0, x - kTrueDepthEdgePx);
+         xx <= std::min(true_disparity.cols - 1, x + kTrueDepthEdgePx); ++xx) {
+      const float n = true_disparity.at<float>(yy, xx);
+      if (!std::isfinite(n) || n <= 0) return {};  // beside the unknown (sky, far): ambiguous
+      lo = std::min(lo, n);
+      hi = std::max(hi, n);
+    }
+  }
+  if (hi - lo > kTrueDepthEdgeSpreadPx) return {};
+  const double z = camera.fx * camera.baseline_m / d;
+  return Eigen::Vector3d((u - camera.cx) * z / camera.fx, (v - camera.cy) * z / camera.fy, z);
+}
+
 void MobileMapperParams::Validate() const {
   edges.Validate();
   perceptual.Validate();
@@ -108,6 +131,11 @@ std::optional<Rejection> MobileMapper::Check(const KeyFrame& f) const {
   }
   if (!f.moving.empty() && (f.moving.type() != CV_8UC1 || f.moving.size() != image_size_)) {
     return Rejection{"moving_mask_size", "the moving mask is not CV_8UC1 of the images' size"};
+  }
+  if (!f.true_disparity.empty() &&
+      (f.true_disparity.type() != CV_32FC1 || f.true_disparity.size() != image_size_)) {
+    return Rejection{"true_disparity_size",
+                     "the true disparity is not CV_32FC1 of the images' size"};
   }
   if (!f.T_odom_base.matrix().allFinite()) {
     return Rejection{"odometry_not_finite", "the odometry pose holds NaN or infinity"};
@@ -200,8 +228,14 @@ KeyFrameReport MobileMapper::AddKeyFrame(const KeyFrame& f) {
   report.edge_points = edges.size();
   FramePoints frame;
   frame.camera_in_base = f.T_base_cam.translation();
+  // A map point's position in the camera: the stereo's, or the true one under evaluation.
+  const auto map_point = [&](float u, float v, const Eigen::Vector3d& p_cam) {
+    if (f.true_disparity.empty()) return p_cam;
+    return TrueDepthOf(f.true_disparity, camera_, u, v).value_or(p_cam);
+  };
   for (const auto& e : edges) {
-    const Eigen::Vector3d p = f.T_base_cam * e.p_cam;
+    const Eigen::Vector3d p_cam = map_point(e.u, e.v, e.p_cam);
+    const Eigen::Vector3d p = f.T_base_cam * p_cam;
     const double h = p.z() - params_.floor_z_in_base_m;
     const bool in_skipped_band =
         h > params_.reference_skip_from_height_m && h < params_.reference_skip_to_height_m;
@@ -212,7 +246,7 @@ KeyFrameReport MobileMapper::AddKeyFrame(const KeyFrame& f) {
     if (static_cast<int>(e.v) % params_.occupancy_edge_row_step == 0 &&
         e.slope <= params_.occupancy_edge_max_slope) {
       frame.points_base.push_back(p);
-      frame.sigmas.push_back(localisation::DepthSigma(camera_, e.p_cam.z(),
+      frame.sigmas.push_back(localisation::DepthSigma(camera_, p_cam.z(),
                                                       params_.features.disparity_sigma_px,
                                                       params_.features.min_point_sigma_m));
     }
@@ -220,8 +254,9 @@ KeyFrameReport MobileMapper::AddKeyFrame(const KeyFrame& f) {
   report.reference_points = frame.reference_points.size();
   for (const auto& s : features.features) {
     if (!params_.occupancy_feature_points) break;
-    frame.points_base.push_back(f.T_base_cam * s.p_cam);
-    frame.sigmas.push_back(localisation::DepthSigma(camera_, s.p_cam.z(),
+    const Eigen::Vector3d p_cam = map_point(s.left.x, s.left.y, s.p_cam);
+    frame.points_base.push_back(f.T_base_cam * p_cam);
+    frame.sigmas.push_back(localisation::DepthSigma(camera_, p_cam.z(),
                                                     params_.features.disparity_sigma_px,
                                                     params_.features.min_point_sigma_m));
   }

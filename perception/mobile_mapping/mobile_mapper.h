@@ -49,7 +49,22 @@ struct KeyFrame {
   // epmapd, the EP's unexpected mask of this frame, grown a little). No map point and no heading
   // feature is taken there: a person walking by is neither a wall nor a landmark to steer by.
   cv::Mat moving;
+  // Evaluation only (epmap-bench maps --true-depth): CV_32FC1 of the left image's size, the
+  // true disparity. When set, each map point (grid and perceptual map) takes its depth from it
+  // where it is unambiguous (TrueDepthOf), so a benchmark can tell what the stereo's depth
+  // error costs the maps from what the rest does. The heading still uses the stereo depths.
+  cv::Mat true_disparity;
 };
+
+// The point of a rectified pixel at its true disparity, or nothing where the disparity is
+// unknown (<= 0, not finite) or ambiguous: a sub-pixel point within kTrueDepthEdgePx of a
+// depth edge (the true disparity varying by more than kTrueDepthEdgeSpreadPx there) may lie on
+// either side of it.
+inline constexpr int kTrueDepthEdgePx = 3;
+inline constexpr float kTrueDepthEdgeSpreadPx = 0.5F;
+std::optional<Eigen::Vector3d> TrueDepthOf(const cv::Mat& true_disparity,
+                                           const stereo::RectifiedGeometry& camera, float u,
+                                           float v);
 
 // A motion mask (e.g. the EP's unexpected mask) grown by kMovingMaskGrowPx on each side, so
 // that the edge points and corners along a moving thing's outline are left out too.

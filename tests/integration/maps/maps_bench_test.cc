@@ -98,6 +98,14 @@ TEST(MapsBench, WritesTheMapsAndTheFigures) {
   EXPECT_NE(Slurp(dir / "err6.txt").find("resolution_m must be positive"), std::string::npos)
       << Slurp(dir / "err6.txt");
 
+  // --true-depth needs the true disparity of every key frame; this dataset has none.
+  const std::string no_truth = bench.string() + " maps --true-depth --dataset " +
+                               (dir / "data").string() + " --out " + (dir / "out7").string() +
+                               " 2> " + (dir / "err7.txt").string();
+  EXPECT_NE(std::system(no_truth.c_str()), 0);
+  EXPECT_NE(Slurp(dir / "err7.txt").find("has no gt_disparity0"), std::string::npos)
+      << Slurp(dir / "err7.txt");
+
   // A folder that is not a mobile-base dataset is refused with a reason.
   const std::string bad = bench.string() + " maps --dataset " + dir.string() + " --out " +
                           (dir / "out3").string() + " 2> " + (dir / "err.txt").string();

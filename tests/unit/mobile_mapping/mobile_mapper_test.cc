@@ -225,9 +225,13 @@ TEST_F(MobileMapperTest, RefusesBadKeyFramesAndKeepsTheMapsIntact) {
   mask.joint_positions = {0.0};
   mask.moving = cv::Mat(120, 160, CV_8UC1, cv::Scalar(0));
   refused(mask, "moving_mask_size");
+  KeyFrame depth = pan;
+  depth.joint_positions = {0.0};
+  depth.true_disparity = cv::Mat(last.left.size(), CV_8UC1, cv::Scalar(10));  // not float
+  refused(depth, "true_disparity_size");
 
   const auto after = mapper.Snapshot();
-  EXPECT_EQ(after->counters.rejected, 7u);
+  EXPECT_EQ(after->counters.rejected, 8u);
   EXPECT_EQ(after->counters.rejected_by_reason.at("odometry_jump"), 1u);
   EXPECT_EQ(after->poses.size(), before->poses.size());
   EXPECT_EQ(after->perceptual.segments.size(), before->perceptual.segments.size());
@@ -266,6 +270,62 @@ TEST_F(MobileMapperTest, NothingIsTakenFromWhereSomethingMovesOnItsOwn) {
   EXPECT_EQ(
       cv::countNonZero(mobile_mapping::GrowMovingMask(dot)),
       (2 * mobile_mapping::kMovingMaskGrowPx + 1) * (2 * mobile_mapping::kMovingMaskGrowPx + 1));
+}
+
+// The true depth (epmap-bench maps --true-depth) is taken where the true disparity is smooth,
+// and nowhere near a depth edge or an unknown pixel.
+TEST(TrueDepth, TakenWhereUnambiguousOnly) {
+  const auto cam = testing::BumblebeeLikeCamera();
+  cv::Mat d(cam.height, cam.width, CV_32FC1, cv::Scalar(15.0F));
+  d(cv::Rect(200, 0, cam.width - 200, cam.height)).setTo(30.0F);  // a nearer surface
+  d.at<float>(20, 20) = std::numeric_limits<float>::quiet_NaN();
+  const auto p = mobile_mapping::TrueDepthOf(d, cam, 100.4F, 119.5F);
+  ASSERT_TRUE(p.has_value());
+  const double z = cam.fx * cam.baseline_m / 15.0;
+  EXPECT_NEAR(p->z(), z, 1e-9);
+  EXPECT_NEAR(p->x(), (100.4 - cam.cx) * z / cam.fx, 1e-6);  // u is a float
+  EXPECT_NEAR(p->y(), 0.0, 1e-9);
+  EXPECT_FALSE(mobile_mapping::TrueDepthOf(d, cam, 198.0F, 100.0F).has_value());  // edge
+  EXPECT_TRUE(mobile_mapping::TrueDepthOf(d, cam, 196.0F, 100.0F).has_value());
+  EXPECT_FALSE(mobile_mapping::TrueDepthOf(d, cam, 22.0F, 22.0F).has_value());  // unknown
+  EXPECT_FALSE(mobile_mapping::TrueDepthOf(d, cam, -3.0F, 10.0F).has_value());  // outside
+}
+
+// Under --true-depth every map point of a key frame lies at the depth the true disparity
+// gives: here a plane 2 m ahead of the camera, whatever the stereo measured in the room.
+TEST_F(MobileMapperTest, MapPointsTakeTheTrueDepthWhenGiven) {
+  const auto cam = testing::BumblebeeLikeCamera();
+  const KeyFrame& f = (*frames_)[0];
+  const double plane_z = 2.0;
+  const auto occupied_off_plane = [&](const cv::Mat& true_disparity) {
+    auto params = Params();
+    params.view_min_key_frames = 1;  // one key frame makes a stop
+    MobileMapper mapper(cam, params);
+    KeyFrame k = f;
+    k.true_disparity = true_disparity;
+    EXPECT_TRUE(mapper.AddKeyFrame(k).accepted);
+    mapper.Flush();
+    const auto g = mapper.Snapshot()->grid.Export();
+    // The camera looks along +x (pan 0, start pose): the plane's cells, plus the occupied
+    // depth behind it and a cell either side for the lattice.
+    const double x = f.T_base_cam.translation().x() + plane_z;
+    int on = 0, off = 0;
+    for (uint32_t r = 0; r < g.height; ++r) {
+      for (uint32_t c = 0; c < g.width; ++c) {
+        const uint8_t v = g.occupancy[r * g.width + c];
+        if (v == occupancy::GridExport::kUnknown || v < 65) continue;
+        const double cx = g.origin_x + (c + 0.5) * g.resolution_m;
+        ++(std::abs(cx - x - 0.05) <= 0.2 ? on : off);
+      }
+    }
+    return std::pair(on, off);
+  };
+  const auto [stereo_on, stereo_off] = occupied_off_plane(cv::Mat());
+  EXPECT_GT(stereo_off, 10);  // the room's walls are not 2 m ahead
+  const auto [true_on, true_off] = occupied_off_plane(cv::Mat(
+      f.left.size(), CV_32FC1, cv::Scalar(static_cast<float>(cam.fx * cam.baseline_m / plane_z))));
+  EXPECT_GT(true_on, 10);
+  EXPECT_EQ(true_off, 0);
 }
 
 // Reference points come from every height between the limits but the skipped (furniture) band;
