@@ -40,8 +40,7 @@ case "$SCENARIO" in
   *) echo "demo.sh: --scenario is head or building, not '$SCENARIO'" >&2; exit 2 ;;
 esac
 case "$ROUTE" in
-  corridors) ROUTE_FRAMES=1849 ;;
-  rooms) ROUTE_FRAMES=2207 ;;
+  corridors | rooms) ;;
   *) echo "demo.sh: --route is corridors or rooms, not '$ROUTE'" >&2; exit 2 ;;
 esac
 if [ "$ROUTE" != corridors ] && [ "$SCENARIO" != building ]; then
@@ -78,14 +77,15 @@ trap cleanup EXIT INT TERM
 # Both robots publish over DDS at their own rates (the head 30 Hz, the base 10 Hz), as a camera
 # driver and encoders would: the stamps are the wall clock, so a faster rate would be a faster
 # robot. The head runs 30 s by default; the building robot its whole route (1849 frames, or 2207
-# on the rooms route).
+# on the rooms route), or --seconds of it (epmap-sim publish --max-frames stops at the route's
+# end if that comes first).
 if [ "$SCENARIO" = head ]; then
   RATE=30
   URDF=clients/sim/urdf/icub_head.urdf
   # The head's nearest surfaces (~0.38 m at 554 px focal length, 68 mm baseline) need ~100 px.
   EPMAPD_ARGS=(--num-disparities 112)
   SIM_ARGS=()
-  FRAMES=$(( ${SECONDS_TO_RUN:-30} * RATE ))
+  FRAMES_ARG=(--frames "$(( ${SECONDS_TO_RUN:-30} * RATE ))")
 else
   URDF=clients/sim/urdf/pan_robot.urdf
   EPMAPD_ARGS=()
@@ -93,10 +93,9 @@ else
   # and what the maps leave out.
   SIM_ARGS=(--walker --route "$ROUTE")
   RATE=10
-  FRAMES=$(( ${SECONDS_TO_RUN:-0} * RATE ))
-  if [ "$FRAMES" = 0 ] || [ "$FRAMES" -gt "$ROUTE_FRAMES" ]; then FRAMES=$ROUTE_FRAMES; fi
+  FRAMES_ARG=(--max-frames "$(( ${SECONDS_TO_RUN:-0} * RATE ))")  # 0: the whole route
 fi
-if [ "$KEEP_GOING" = 1 ] && [ "$SCENARIO" = head ]; then FRAMES=100000000; fi
+if [ "$KEEP_GOING" = 1 ] && [ "$SCENARIO" = head ]; then FRAMES_ARG=(--frames 100000000); fi
 
 echo "== epmapd on 127.0.0.1:$PORT, DDS domain $DOMAIN, $URDF (log: $OUT/epmapd.log)"
 $BIN/epmapd --listen "$SERVER" --domain "$DOMAIN" --urdf "$URDF" "${EPMAPD_ARGS[@]}" \
@@ -107,9 +106,9 @@ for _ in $(seq 1 100); do
   sleep 0.2
 done
 
-echo "== epmap-sim publish --scenario $SCENARIO ${SIM_ARGS[*]} ($FRAMES frames at $RATE Hz; log: $OUT/sim.log)"
+echo "== epmap-sim publish --scenario $SCENARIO ${SIM_ARGS[*]} ${FRAMES_ARG[*]} at $RATE Hz (log: $OUT/sim.log)"
 $BIN/epmap-sim publish --scenario "$SCENARIO" "${SIM_ARGS[@]}" --domain "$DOMAIN" --rate "$RATE" \
-  --frames "$FRAMES" > "$OUT/sim.log" 2>&1 &
+  "${FRAMES_ARG[@]}" > "$OUT/sim.log" 2>&1 &
 SIM=$!
 PIDS+=("$SIM")
 

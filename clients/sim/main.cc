@@ -1,6 +1,8 @@
 // epmap-sim: synthetic worlds with exact ground truth (clients/sim/README.md).
 //   epmap-sim record  --scenario NAME --out DIR [--frames N] [--seed S] [--size WxH] [--force]
-//   epmap-sim publish --scenario NAME --domain N [--rate HZ] [--frames N] [--seed S] [--size WxH]
+//   epmap-sim publish --scenario NAME --domain N [--rate HZ] [--frames N | --max-frames N] [--seed
+//   S]
+//                     [--size WxH]
 //   epmap-sim list
 // Scenario knobs for both: --encoder-noise-scale X, --flicker-scale X, --no-noise, and for
 // building --reverse, --disparity-every-frame, --walker, --first-frame N.
@@ -116,11 +118,12 @@ int Record(const CommonFlags& flags, const std::string& out, bool force) {
   return 0;
 }
 
-int Publish(const CommonFlags& flags, uint32_t domain, double rate, double wait_s) {
+int Publish(const CommonFlags& flags, uint32_t domain, double rate, double wait_s, int max_frames) {
   const auto scenario = epmap::sim::MakeScenario(flags.Options());
   epmap::sim::PublishOptions o;
   o.domain_id = domain;
   o.rate_hz = rate;
+  o.max_frames = max_frames;
   o.wait_for_readers = std::chrono::milliseconds(static_cast<int64_t>(wait_s * 1000));
   o.stop_requested = [] { return g_stop.load(); };
   o.log = [](const std::string& m) { std::cerr << "epmap-sim: " << m << "\n"; };
@@ -152,6 +155,7 @@ int main(int argc, char** argv) {
   uint32_t domain = 0;
   double rate = 0;
   double wait_s = 10;
+  int max_frames = 0;
   auto* publish = app.add_subcommand("publish", "send the frames over DDS in real time");
   publish_flags.AddTo(publish);
   publish->add_option("--domain", domain, "DDS domain id")->required()->check(CLI::Range(0, 232));
@@ -160,12 +164,18 @@ int main(int argc, char** argv) {
   publish->add_option("--wait", wait_s, "seconds to wait for readers before sending (default 10)")
       ->check(CLI::NonNegativeNumber);
 
+  publish
+      ->add_option("--max-frames", max_frames,
+                   "stop after this many frames, or at the scenario's end if it has fewer (unlike "
+                   "--frames, more than the scenario has is not an error; 0: all)")
+      ->check(CLI::NonNegativeNumber);
+
   auto* list = app.add_subcommand("list", "list the scenarios");
 
   CLI11_PARSE(app, argc, argv);
   try {
     if (*record) return Record(record_flags, out, force);
-    if (*publish) return Publish(publish_flags, domain, rate, wait_s);
+    if (*publish) return Publish(publish_flags, domain, rate, wait_s, max_frames);
     if (*list) {
       for (const auto& name : epmap::sim::ScenarioNames()) std::cout << name << "\n";
       return 0;

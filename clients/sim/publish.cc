@@ -7,6 +7,7 @@
 #include <epmap_dds/OdometryPubSubTypes.h>
 #include <epmap_dds/StringPubSubTypes.h>
 
+#include <algorithm>
 #include <condition_variable>
 #include <map>
 #include <mutex>
@@ -37,8 +38,11 @@ void Log(const PublishOptions& o, const std::string& message) {
 // waits while it is more than `ahead` frames in front of the sender.
 class RenderAhead {
  public:
-  RenderAhead(const Scenario& scenario, int workers, int ahead)
-      : scenario_(scenario), ahead_(ahead), total_(scenario.frame_count()) {
+  // limit > 0: only the first `limit` frames (or all, when the scenario has fewer).
+  RenderAhead(const Scenario& scenario, int workers, int ahead, int limit)
+      : scenario_(scenario),
+        ahead_(ahead),
+        total_(limit > 0 ? std::min(limit, scenario.frame_count()) : scenario.frame_count()) {
     for (int w = 0; w < workers; ++w) threads_.emplace_back([this] { Work(); });
   }
   ~RenderAhead() { Stop(); }
@@ -156,6 +160,7 @@ PublishReport PublishEyeHand(const Scenario& scenario, const PublishOptions& o) 
 PublishReport Publish(const Scenario& scenario, const PublishOptions& o) {
   if (!(o.rate_hz >= 0)) throw std::invalid_argument("publish rate must be >= 0 Hz");
   if (o.render_threads < 1) throw std::invalid_argument("publish needs at least 1 render thread");
+  if (o.max_frames < 0) throw std::invalid_argument("publish: max_frames must be >= 0");
   if (scenario.frame_count() == 0) return PublishEyeHand(scenario, o);
 
   dds::Participant participant(o.domain_id, "epmap-sim");
@@ -189,7 +194,7 @@ PublishReport Publish(const Scenario& scenario, const PublishOptions& o) {
 
   // Render ahead while discovery runs: two workers, so that a frame's ~25 ms of rendering on
   // one core leaves room for sending at 30 Hz.
-  RenderAhead frames(scenario, o.render_threads, 6);
+  RenderAhead frames(scenario, o.render_threads, 6, o.max_frames);
 
   PublishReport report;
   const auto deadline = Clock::now() + o.wait_for_readers;

@@ -19,6 +19,7 @@ namespace epmap::sim {
 struct PublishOptions {
   uint32_t domain_id = 0;
   double rate_hz = 0;                // 0 = the scenario's own rate
+  int max_frames = 0;                // stop after this many stereo frames (0: all there are)
   bool as_fast_as_possible = false;  // ignore the rate (benchmarks): send as rendering allows
   dds::TopicNames topics;
   // Before sending, wait until a reader matched each image writer (or the sample writer), at

@@ -11,6 +11,8 @@
 #include <epmap_dds/OdometryPubSubTypes.h>
 #include <epmap_dds/StringPubSubTypes.h>
 
+#include <atomic>
+#include <chrono>
 #include <map>
 #include <mutex>
 
@@ -21,6 +23,7 @@
 #include "common/dds/topics.h"
 #include "tests/e2e/sim/run_command.h"
 #include "tests/support/test_env.h"
+#include "tests/support/wait_for.h"
 
 namespace epmap::sim {
 namespace {
@@ -161,6 +164,38 @@ TEST(EpmapSimPublish, BuildingSendsGreyImagesAndOdometry) {
   ASSERT_EQ(odometry.size(), 12u);
   // The robot drives off after its first look-around (7 frames).
   EXPECT_GT(odometry.back().x, 0.1);
+}
+
+// --max-frames caps what is sent and, unlike --frames, stops quietly at the route's end
+// (scripts/demo.sh --seconds uses it without knowing how long the route is).
+TEST(EpmapSimPublish, MaxFramesStopsAtTheEndOfTheRoute) {
+  const uint32_t domain = epmap::testing::UniqueDomainId(14);
+  const dds::TopicNames topics;
+  dds::Participant participant(domain, "sim-publish-max-frames-test");
+  std::atomic<int> received{0};
+  dds::Reader<sensor_msgs::msg::Image, sensor_msgs::msg::ImagePubSubType> left_reader(
+      participant, topics.left_image, [&](sensor_msgs::msg::Image&&) { ++received; }, 8u << 20, 50);
+  dds::Reader<sensor_msgs::msg::Image, sensor_msgs::msg::ImagePubSubType> right_reader(
+      participant, topics.right_image, [](sensor_msgs::msg::Image&&) {}, 8u << 20, 50);
+  const std::string publish = (epmap::testing::BinDir() / "epmap-sim").string() +
+                              " publish --scenario building --domain " + std::to_string(domain) +
+                              " --size 80x60 --first-frame 1844";  // 5 frames before the end
+  const auto capped = testing::RunCommand(publish + " --max-frames 3");
+  ASSERT_EQ(capped.exit_code, 0) << capped.output;
+  EXPECT_NE(capped.output.find("sent 3 stereo frames"), std::string::npos) << capped.output;
+  EXPECT_TRUE(
+      epmap::testing::WaitFor([&] { return received.load() == 3; }, std::chrono::seconds(5)));
+  received = 0;
+  const auto to_the_end = testing::RunCommand(publish + " --max-frames 500");
+  ASSERT_EQ(to_the_end.exit_code, 0) << to_the_end.output;
+  EXPECT_NE(to_the_end.output.find("sent 5 stereo frames"), std::string::npos) << to_the_end.output;
+  EXPECT_TRUE(
+      epmap::testing::WaitFor([&] { return received.load() == 5; }, std::chrono::seconds(5)));
+  const auto too_many = testing::RunCommand(publish + " --frames 500");
+  EXPECT_NE(too_many.exit_code, 0);
+  EXPECT_NE(too_many.output.find("--frames 500 is more"), std::string::npos) << too_many.output;
+  const auto negative = testing::RunCommand(publish + " --max-frames -2");
+  EXPECT_NE(negative.exit_code, 0);
 }
 
 TEST(EpmapSimPublish, EyeHandSendsOneMessagePerPath) {
