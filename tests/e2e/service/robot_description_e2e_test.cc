@@ -1,7 +1,8 @@
 // The URDF from a latched ROS 2 topic: a test participant plays robot_state_publisher (the
 // pan-head robot's URDF as std_msgs/String on rt/robot_description, reliable + transient local,
 // written before epmapd starts) and a real epmapd takes its kinematic chain from it. Nothing on
-// the topic, or a text that is not a URDF, is a clear startup error (exit 1).
+// the topic, a text that is not a URDF, or one over 16 MiB is a clear startup error (exit 1); a
+// 12 MiB one is taken whole.
 
 #include <epmap_dds/StringPubSubTypes.h>
 #include <gtest/gtest.h>
@@ -53,6 +54,18 @@ TEST(RobotDescriptionE2E, TheLatchedDescriptionIsTheServicesUrdf) {
   const uint32_t domain = testing::UniqueDomainId(71);
   const std::string urdf = ReadText(testing::SourceDir() / "clients/sim/urdf/pan_robot.urdf");
   ASSERT_NE(urdf.find("<robot"), std::string::npos);
+  {
+    // A large one (12 MiB: meshes pasted in as comments) under the 16 MiB limit is taken whole.
+    std::string large = urdf;
+    large.insert(large.rfind("</robot>"), "<!--" + std::string(12u << 20, 'm') + "-->\n");
+    DescriptionPublisher publisher(domain, "rt/large_description", large);
+    const auto [code, out] =
+        CheckRobot(work, {"--domain", std::to_string(domain), "--urdf-topic",
+                          "rt/large_description", "--state-dir", (work / "large-state").string()});
+    ASSERT_EQ(code, 0) << out;
+    EXPECT_NE(out.find("root link (the base): base_link"), std::string::npos) << out;
+    EXPECT_EQ(ReadText(work / "large-state" / "robot_description.urdf"), large);
+  }
   // Written before any epmapd exists: only a transient-local reader gets it.
   DescriptionPublisher publisher(domain, "rt/robot_description", urdf);
 
@@ -106,6 +119,19 @@ TEST(RobotDescriptionE2E, NothingOnTheTopicOrNoUrdfIsAClearStartupError) {
                           "--urdf-topic", "rt/not_a_description"});
     EXPECT_EQ(code, 1) << out;
     EXPECT_NE(out.find("is not a URDF <robot>"), std::string::npos) << out;
+  }
+  {
+    // A description over the 16 MiB the service takes (a URDF with meshes pasted in, say) is
+    // refused by its size, before it is decoded.
+    std::string huge = "<robot name=\"huge\"><!--";
+    huge.append((17u << 20) - huge.size(), 'x');
+    huge += "--></robot>";
+    DescriptionPublisher publisher(domain, "rt/huge_description", std::move(huge));
+    const auto [code, out] =
+        CheckRobot(work, {"--config", config.string(), "--domain", std::to_string(domain),
+                          "--urdf-topic", "rt/huge_description"});
+    EXPECT_EQ(code, 1) << out;
+    EXPECT_NE(out.find("is larger than 16 MiB"), std::string::npos) << out;
   }
   // A file and a topic at once in the config is a configuration error (exit 2).
   std::ofstream(config) << "robot:\n  urdf: robot.urdf\n  urdf_topic: rt/robot_description\n";
