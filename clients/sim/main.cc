@@ -1,8 +1,7 @@
 // epmap-sim: synthetic worlds with exact ground truth (clients/sim/README.md).
 //   epmap-sim record  --scenario NAME --out DIR [--frames N] [--seed S] [--size WxH] [--force]
-//   epmap-sim publish --scenario NAME --domain N [--rate HZ] [--frames N | --max-frames N] [--seed
-//   S]
-//                     [--size WxH]
+//   epmap-sim publish --scenario NAME --domain N [--rate HZ] [--frames N | --max-frames N]
+//                     [--seed S] [--size WxH]
 //   epmap-sim list
 // Scenario knobs for both: --encoder-noise-scale X, --flicker-scale X, --no-noise, and for
 // building --reverse, --disparity-every-frame, --walker, --first-frame N.

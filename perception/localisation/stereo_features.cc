@@ -50,12 +50,12 @@ cv::Mat Grey(const cv::Mat& image) {
   return g;
 }
 
+}  // namespace
+
 Eigen::Vector3d Backproject(const stereo::RectifiedGeometry& c, const cv::Point2f& l, double d) {
   const double z = c.fx * c.baseline_m / d;
   return {(l.x - c.cx) * z / c.fx, (l.y - c.cy) * z / c.fy, z};
 }
-
-}  // namespace
 
 StereoFeatureTracker::StereoFeatureTracker(const stereo::RectifiedGeometry& camera,
                                            const StereoFeatureParams& params)

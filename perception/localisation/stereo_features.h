@@ -40,6 +40,10 @@ struct StereoFeature {
   Eigen::Vector3d p_cam;    // metres, rectified left camera
 };
 
+// The point (rectified left camera, metres) of left pixel l at disparity d > 0 px.
+Eigen::Vector3d Backproject(const stereo::RectifiedGeometry& camera, const cv::Point2f& l,
+                            double d);
+
 // Depth uncertainty of a stereo point at depth z: z^2 sigma_d / (f b), at least min_sigma.
 double DepthSigma(const stereo::RectifiedGeometry& camera, double z, double disparity_sigma_px,
                   double min_sigma_m);

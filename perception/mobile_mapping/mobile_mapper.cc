@@ -51,8 +51,7 @@ std::optional<Eigen::Vector3d> TrueDepthOf(const cv::Mat& true_disparity,
     }
   }
   if (hi - lo > kTrueDepthEdgeSpreadPx) return {};
-  const double z = camera.fx * camera.baseline_m / d;
-  return Eigen::Vector3d((u - camera.cx) * z / camera.fx, (v - camera.cy) * z / camera.fy, z);
+  return localisation::Backproject(camera, {u, v}, d);
 }
 
 void MobileMapperParams::Validate() const {
