@@ -81,7 +81,7 @@ struct MobileMapperParams {
     // the nearest common object (paper 003 Sec. III-C, whose robot had only odometry). A
     // misplaced anchor moved a whole view, and every view after it, so the map's figures
     // swung from run to run; placed by the pose, on the rooms route: wall coverage 74.2 ->
-    // 77.3 %, stray length 15.4 -> 12.9 % (mean of 4 runs, perception/mobile_mapping/README.md).
+    // 77.3 %, stray length 15.4 -> 12.9 % (mean of 4 runs, perception/mobile_mapping/EXPERIMENTS.md).
     perceptual.place_by_pose = true;
     // A point also marks the body of the wall behind it: seen from a room and from the
     // corridor, the two faces of a 12 cm wall then fill the same cells, and the correlation no
@@ -153,7 +153,7 @@ struct MobileMapperParams {
   // added to all later poses. Rooms route, mean of 4 runs of the median position error over
   // the key frames: 8.4 cm whole, 3.7 cm filtered (with the occupied depth above); with
   // odometry that under-counts the distance by 1 %, 10.4 cm whole, 8.7 cm filtered, 12.8 cm
-  // without any correlation (perception/mobile_mapping/README.md). Set it to the base's own
+  // without any correlation (perception/mobile_mapping/EXPERIMENTS.md). Set it to the base's own
   // drift; 0.02 is a wheeled base's usual 1-5 %'s lower end.
   // Noise of one shift, in cells: the parabola through the peak places it to about a third of
   // a cell (3 cm on the default 0.1 m lattice), so it scales with grid.resolution_m.

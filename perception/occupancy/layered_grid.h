@@ -36,7 +36,7 @@ enum class Membership {
   // passing through it. A cell in front of a wall, where a few noisy points land but most rays
   // pass, stays free: on the building run, occupied cells on a wall face 955 -> 1109, beside
   // one 497 -> 339, far from walls and furniture 274 -> 107 (grid IoU over seen cells
-  // 0.35 -> 0.51, perception/mobile_mapping/README.md).
+  // 0.35 -> 0.51, perception/mobile_mapping/EXPERIMENTS.md).
   kRayFrequency,
   // FLOG's fuzzy union (probabilistic sum a + b - ab) of fixed evidence per ray: a handful of
   // noisy points saturates mu_O whatever the rays passing through say.

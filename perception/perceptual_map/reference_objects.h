@@ -65,7 +65,7 @@ struct ClusteringParams {
   // points anywhere. A larger cell holds the wall's whole scatter over a longer stretch, and
   // the regression (Eq. 3-4) averages it out along the wall. Four building runs: wall
   // coverage 54.6 -> 57.8 % (mean; better on each run), over the walls the cameras had in
-  // view 77.3 -> 80.3 %, stray length 7.8 -> 9.1 % (perception/mobile_mapping/README.md).
+  // view 77.3 -> 80.3 %, stray length 7.8 -> 9.1 % (perception/mobile_mapping/EXPERIMENTS.md).
   double far_from_range_m = 8.0;
   double far_cell_size_m = 1.0;
   void Validate() const;

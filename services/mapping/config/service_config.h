@@ -73,7 +73,7 @@ struct MapsSettings {
   double odometry_drift_per_m = 0.02;
   // Cell size of the occupancy grid (occupancy::GridParams::resolution_m). 0.1 m is about the
   // rig's depth noise at 3-4 m; 0.125-0.2 m cells scored no better against the building's
-  // walls on all four runs (perception/mobile_mapping/README.md).
+  // walls on all four runs (perception/mobile_mapping/EXPERIMENTS.md).
   double grid_resolution_m = 0.1;
   // Perceptual-map views placed by the corrected pose; false: triangulated from the nearest
   // common object, as paper 003 Sec. III-C (perceptual_map::PerceptualMapParams).
