@@ -60,6 +60,27 @@ const PoseRecord& PoseCorrector::latest() const {
   return records_.back();
 }
 
+void PoseCorrector::Restore(std::vector<PoseRecord> records) {
+  const auto rigid = [](const Eigen::Isometry2d& T) {
+    const Eigen::Matrix2d R = T.linear();
+    return T.matrix().allFinite() &&
+           (R * R.transpose() - Eigen::Matrix2d::Identity()).norm() < 1e-6;
+  };
+  for (size_t i = 0; i < records.size(); ++i) {
+    const auto& r = records[i];
+    if (!rigid(r.T_world_base_odometry) || !rigid(r.T_world_base) ||
+        !std::isfinite(r.visual_dtheta) || !std::isfinite(r.odometry_dtheta)) {
+      throw std::invalid_argument("pose corrector: saved record " + std::to_string(i) +
+                                  " is not a finite rigid pose");
+    }
+    if (i > 0 && r.stamp_ns <= records[i - 1].stamp_ns) {
+      throw std::invalid_argument("pose corrector: saved stamps do not increase at record " +
+                                  std::to_string(i));
+    }
+  }
+  records_ = std::move(records);
+}
+
 const PoseRecord& PoseCorrector::Add(int64_t stamp_ns, const Eigen::Isometry2d& T_odom_base,
                                      std::optional<double> visual_dtheta) {
   if (!T_odom_base.matrix().allFinite()) {

@@ -58,6 +58,10 @@ class PoseCorrector {
   // (the key frames of the stop that was registered); later key frames build on them.
   void ApplyTranslation(const Eigen::Vector2d& delta_world, size_t first_record);
 
+  // Takes over saved records (a resumed map): stamps increasing, poses finite and rigid, or
+  // std::invalid_argument and the corrector unchanged.
+  void Restore(std::vector<PoseRecord> records);
+
   bool empty() const { return records_.empty(); }
   const PoseRecord& latest() const;
   const std::vector<PoseRecord>& records() const { return records_; }

@@ -184,8 +184,32 @@ std::optional<Rejection> MobileMapper::Check(const KeyFrame& f) const {
   return std::nullopt;
 }
 
+void MobileMapper::ClearMaps() {
+  poses_ = localisation::PoseCorrector(params_.pose);
+  perceptual_ = perceptual_map::PerceptualMapper(params_.perceptual);
+  grid_ = occupancy::LayeredGrid(params_.grid);
+  previous_features_.reset();
+  seen_panning_stop_ = false;
+  group_ = Group{};
+  filter_ = PositionFilter{};
+  counters_ = MapperCounters{};
+  last_stamp_ns_ = 0;
+  restore_unconfirmed_ = false;
+}
+
 KeyFrameReport MobileMapper::AddKeyFrame(const KeyFrame& f) {
   KeyFrameReport report;
+  if (restore_unconfirmed_) {
+    // The first key frame after a restore: does it continue the saved run?
+    auto rejection = Check(f);
+    if (rejection &&
+        (rejection->reason == "stamp_not_increasing" || rejection->reason == "odometry_jump")) {
+      report.restored_maps_dropped = rejection->message;
+      ClearMaps();
+    } else if (!rejection) {
+      restore_unconfirmed_ = false;
+    }
+  }
   if (auto rejection = Check(f)) {
     ++counters_.rejected;
     ++counters_.rejected_by_reason[rejection->reason];

@@ -18,6 +18,7 @@
 #include <opencv2/core.hpp>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "perception/localisation/lorentzian_registration.h"
@@ -81,7 +82,8 @@ struct MobileMapperParams {
     // the nearest common object (paper 003 Sec. III-C, whose robot had only odometry). A
     // misplaced anchor moved a whole view, and every view after it, so the map's figures
     // swung from run to run; placed by the pose, on the rooms route: wall coverage 74.2 ->
-    // 77.3 %, stray length 15.4 -> 12.9 % (mean of 4 runs, perception/mobile_mapping/EXPERIMENTS.md).
+    // 77.3 %, stray length 15.4 -> 12.9 % (mean of 4 runs,
+    // perception/mobile_mapping/EXPERIMENTS.md).
     perceptual.place_by_pose = true;
     // A point also marks the body of the wall behind it: seen from a room and from the
     // corridor, the two faces of a 12 cm wall then fill the same cells, and the correlation no
@@ -195,6 +197,9 @@ struct KeyFrameReport {
   bool map_expanded = false;  // the perceptual map grew
   bool shifted = false;       // correlation moved the pose
   Eigen::Vector2d shift_m = Eigen::Vector2d::Zero();
+  // Set when this was the first key frame after RestoreState and it did not continue the
+  // saved run (why): the restored maps were dropped and this key frame started new ones.
+  std::optional<std::string> restored_maps_dropped;
 };
 
 struct MapperCounters {
@@ -248,6 +253,22 @@ class MobileMapper {
   // it closed now. (A moving base opens a one-key-frame group at each key frame; the next one
   // closes it.)
   bool standing_at_stop() const;
+
+  // The maps, the poses, the counters and the correlation's filter as bytes (a versioned
+  // binary format, mapper_state.cc), for a service that must resume its maps after a restart.
+  // The open stop is not in them: its key frames' points are not kept, so a stop under way is
+  // lost on a restart; every closed stop is there.
+  std::string SaveState() const;
+  // On a mapper that has accepted no key frame: takes over saved maps. Returns false with a
+  // reason, changing nothing, for bytes that are not a whole state of this format, or a state
+  // of another camera or grid lattice (resolution, height bands). The first key frame after it
+  // must continue the saved run: a later stamp, odometry within the jump limits of the saved
+  // last pose. Otherwise the odometry is not the frame the maps are in (the base restarted its
+  // odometry, or the robot was carried): the restored maps are dropped and that key frame
+  // starts new ones (KeyFrameReport::restored_maps_dropped).
+  bool RestoreState(std::string_view bytes, std::string* reason);
+  // RestoreState took a state and no key frame has confirmed or dropped it yet.
+  bool restore_unconfirmed() const { return restore_unconfirmed_; }
 
   const MapperCounters& counters() const { return counters_; }
   const localisation::PoseCorrector& poses() const { return poses_; }
@@ -305,6 +326,9 @@ class MobileMapper {
   MapperCounters counters_;
   int64_t last_stamp_ns_ = 0;
   cv::Size image_size_;
+  bool restore_unconfirmed_ = false;
+  // Back to a mapper that has seen nothing (the restored maps were not the odometry's).
+  void ClearMaps();
 };
 
 }  // namespace epmap::mobile_mapping

@@ -124,6 +124,52 @@ LayeredGrid& LayeredGrid::operator=(const LayeredGrid& other) {
   return *this;
 }
 
+std::vector<LayeredGrid::LayerPlanes> LayeredGrid::Planes() const {
+  return LayeredGrid(*this).layers_;  // the copy constructor clones every plane
+}
+
+void LayeredGrid::RestorePlanes(int64_t min_ix, int64_t min_iy, int width, int height,
+                                std::vector<LayerPlanes> planes) {
+  const auto fail = [](const std::string& what) {
+    throw std::invalid_argument("occupancy grid: saved cells do not fit: " + what);
+  };
+  if (planes.size() != layers_.size()) {
+    fail(std::to_string(planes.size()) + " layers, the grid has " + std::to_string(layers_.size()));
+  }
+  if (width < 0 || height < 0 || (width == 0) != (height == 0)) {
+    fail("size " + std::to_string(width) + " x " + std::to_string(height));
+  }
+  const auto check = [&](const cv::Mat& m, bool optional, bool unit, const char* name) {
+    if (optional && m.empty()) return;
+    if (width == 0 && m.empty()) return;
+    if (m.type() != CV_32FC1 || m.cols != width || m.rows != height) {
+      fail(std::string(name) + " is not CV_32FC1 of " + std::to_string(width) + " x " +
+           std::to_string(height));
+    }
+    if (!cv::checkRange(m, true, nullptr, 0.0, unit ? 1.0 + 1e-6 : 1e30)) {
+      fail(std::string(name) + (unit ? " holds values outside [0, 1]" : " holds bad weights"));
+    }
+  };
+  for (const auto& p : planes) {
+    check(p.empty, false, true, "empty");
+    check(p.occupied, false, true, "occupied");
+    check(p.confidence, false, true, "confidence");
+    check(p.hits, true, false, "hits");
+    check(p.passes, true, false, "passes");
+    if (p.hits.empty() != p.passes.empty() || p.hits.empty() != planes.front().hits.empty()) {
+      fail("hits and passes come together, in every layer or none");
+    }
+  }
+  layers_ = std::move(planes);
+  for (auto& l : layers_) {  // an empty grid keeps empty planes, as a new one has
+    if (width == 0) l = Layer{};
+  }
+  min_ix_ = width == 0 ? 0 : min_ix;
+  min_iy_ = width == 0 ? 0 : min_iy;
+  width_ = width;
+  height_ = height;
+}
+
 Eigen::Vector2d LayeredGrid::origin() const {
   return {static_cast<double>(min_ix_) * params_.resolution_m,
           static_cast<double>(min_iy_) * params_.resolution_m};

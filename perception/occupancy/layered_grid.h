@@ -164,13 +164,24 @@ class LayeredGrid {
   // fuzzy union of both. The local map is shifted by (shift_x, shift_y) cells first.
   void MergeWeighted(const LayeredGrid& local, int shift_x_cells = 0, int shift_y_cells = 0);
 
- private:
-  struct Layer {
-    cv::Mat empty, occupied, confidence;  // CV_32FC1, height_ x width_
+  // The cells of one layer, as a saved map holds them.
+  struct LayerPlanes {
+    cv::Mat empty, occupied, confidence;  // CV_32FC1, height() x width()
     // kRayFrequency: weight of the points in each cell (hits) and of the rays through it
-    // (passes). A merged (global) map has none: its memberships are averages.
+    // (passes). A merged (global) map has none (empty Mats): its memberships are averages.
     cv::Mat hits, passes;
   };
+  // Deep copies of every layer's cells (for saving a map: mobile_mapping's state).
+  std::vector<LayerPlanes> Planes() const;
+  // Replaces the cells with saved ones: lattice cell (min_ix + c, min_iy + r) is (c, r) of each
+  // plane. Throws std::invalid_argument, leaving the grid as it was, when they do not fit this
+  // grid: another layer count, planes not CV_32FC1 of height x width, memberships and
+  // confidence not within [0, 1], weights negative or not finite.
+  void RestorePlanes(int64_t min_ix, int64_t min_iy, int width, int height,
+                     std::vector<LayerPlanes> planes);
+
+ private:
+  using Layer = LayerPlanes;
   void EnsureCovers(int64_t ix_lo, int64_t iy_lo, int64_t ix_hi, int64_t iy_hi);
   void CheckLayer(int layer) const;
   void CheckFirstLayers(int first_layers) const;

@@ -39,6 +39,57 @@ PerceptualMapper::PerceptualMapper(const PerceptualMapParams& params) : params_(
   params_.Validate();
 }
 
+PerceptualMapper::State PerceptualMapper::SavedState() const {
+  State s;
+  s.segments = segments_;
+  s.views = views_;
+  s.has_latest = has_latest_;
+  s.latest_record = latest_.record;
+  s.latest_objects = latest_.objects;
+  s.latest_global_id = latest_.global_id;
+  s.last_map_view = last_map_view_;
+  s.next_id = next_id_;
+  s.skipped_views = skipped_views_;
+  s.expansions = expansions_;
+  s.last_stamp_ns = last_stamp_ns_;
+  return s;
+}
+
+void PerceptualMapper::Restore(State s) {
+  const auto fail = [](const std::string& what) {
+    throw std::invalid_argument("perceptual map: saved state does not hold together: " + what);
+  };
+  for (const auto& g : s.segments) {
+    if (!g.a.allFinite() || !g.b.allFinite()) fail("a segment is not finite");
+    if (g.id == 0 || g.id >= s.next_id) fail("segment id " + std::to_string(g.id));
+  }
+  for (const auto& v : s.views) {
+    if (!v.T_world_base.matrix().allFinite() || !v.T_map_base.matrix().allFinite()) {
+      fail("a view's pose is not finite");
+    }
+  }
+  if (s.has_latest && s.latest_record >= s.views.size()) fail("the newest view is not a view");
+  if (!s.views.empty() && s.last_map_view >= s.views.size()) fail("the last map view");
+  if (s.latest_global_id.size() != s.latest_objects.size()) fail("ids per object");
+  for (const auto& o : s.latest_objects) {
+    if (!o.a.allFinite() || !o.b.allFinite()) fail("an object is not finite");
+  }
+  for (const int64_t id : s.latest_global_id) {
+    if (id < -1 || id >= static_cast<int64_t>(s.next_id)) fail("object id " + std::to_string(id));
+  }
+  segments_ = std::move(s.segments);
+  views_ = std::move(s.views);
+  has_latest_ = s.has_latest;
+  latest_.record = s.latest_record;
+  latest_.objects = std::move(s.latest_objects);
+  latest_.global_id = std::move(s.latest_global_id);
+  last_map_view_ = static_cast<size_t>(s.last_map_view);
+  next_id_ = s.next_id;
+  skipped_views_ = static_cast<size_t>(s.skipped_views);
+  expansions_ = static_cast<size_t>(s.expansions);
+  last_stamp_ns_ = s.last_stamp_ns;
+}
+
 namespace {
 
 // Angle between two undirected lines, in [0, pi/2].

@@ -102,6 +102,25 @@ class PerceptualMapper {
   size_t expansions() const { return expansions_; }
   const PerceptualMapParams& params() const { return params_; }
 
+  // Everything the mapper has built, for saving a map and resuming it (mobile_mapping's state).
+  struct State {
+    std::vector<MapSegment> segments;
+    std::vector<MapView> views;
+    bool has_latest = false;
+    uint32_t latest_record = 0;                   // index into views of the newest view
+    std::vector<ReferenceObject> latest_objects;  // its objects, in its base frame
+    std::vector<int64_t> latest_global_id;        // per object: id in the global map, or -1
+    uint64_t last_map_view = 0;                   // index into views of the last to join
+    uint32_t next_id = 1;
+    uint64_t skipped_views = 0;
+    uint64_t expansions = 0;
+    int64_t last_stamp_ns = 0;
+  };
+  State SavedState() const;
+  // Takes over a saved state; throws std::invalid_argument (mapper unchanged) when its indices
+  // or ids do not hold together or a coordinate is not finite.
+  void Restore(State state);
+
  private:
   struct ViewState {
     uint32_t record = 0;  // index into views_

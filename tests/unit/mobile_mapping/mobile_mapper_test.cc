@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <opencv2/imgproc.hpp>
+#include <string_view>
 
 #include "perception/localisation/pose_corrector.h"
 #include "perception/mobile_mapping/key_frame_selector.h"
@@ -407,6 +409,133 @@ TEST_F(MobileMapperTest, TheCorrelationFilterWeighsShiftsAgainstOdometryDrift) {
   }
   EXPECT_LT(most_apart, 1e-3);
   EXPECT_GT(whole_apart, 5e-3);
+}
+
+// A service restart: the maps saved after a closed stop, restored into a new mapper, go on
+// exactly as the maps that never stopped (resuming at a key frame where the base stands, so
+// that the heading does not need the previous key frame's features, which are not saved).
+TEST_F(MobileMapperTest, SavedMapsResumeExactlyWhereTheyStopped) {
+  size_t k = frames_->size() / 2;
+  while (k + 1 < frames_->size() &&
+         !((*frames_)[k].T_odom_base.matrix() == (*frames_)[k - 1].T_odom_base.matrix())) {
+    ++k;
+  }
+  ASSERT_LT(k + 1, frames_->size()) << "no panning stop in the second half of the run";
+  MobileMapper running(testing::BumblebeeLikeCamera(), Params());
+  for (size_t i = 0; i < k; ++i) ASSERT_TRUE(running.AddKeyFrame((*frames_)[i]).accepted);
+  running.Flush();
+  const std::string saved = running.SaveState();
+  ASSERT_GT(running.counters().views, 0u);
+
+  MobileMapper resumed(testing::BumblebeeLikeCamera(), Params());
+  std::string reason;
+  ASSERT_TRUE(resumed.RestoreState(saved, &reason)) << reason;
+  EXPECT_TRUE(resumed.restore_unconfirmed());
+  EXPECT_EQ(resumed.SaveState(), saved);  // byte for byte
+
+  for (size_t i = k; i < frames_->size(); ++i) {
+    const auto a = running.AddKeyFrame((*frames_)[i]);
+    const auto b = resumed.AddKeyFrame((*frames_)[i]);
+    ASSERT_TRUE(a.accepted && b.accepted);
+    EXPECT_FALSE(b.restored_maps_dropped.has_value());
+  }
+  EXPECT_FALSE(resumed.restore_unconfirmed());
+  running.Flush();
+  resumed.Flush();
+  EXPECT_EQ(resumed.SaveState(), running.SaveState());
+  const auto a = running.Snapshot(), b = resumed.Snapshot();
+  ASSERT_EQ(a->perceptual.segments.size(), b->perceptual.segments.size());
+  for (size_t i = 0; i < a->perceptual.segments.size(); ++i) {
+    EXPECT_EQ(a->perceptual.segments[i].id, b->perceptual.segments[i].id);
+    EXPECT_EQ(a->perceptual.segments[i].a, b->perceptual.segments[i].a);
+  }
+  EXPECT_EQ(a->grid.Export().occupancy, b->grid.Export().occupancy);
+  EXPECT_EQ(a->poses.back().T_world_base.matrix(), b->poses.back().T_world_base.matrix());
+  EXPECT_EQ(a->counters.views, b->counters.views);
+}
+
+// Bytes that are not a whole state of this mapper's camera and lattice are refused with a
+// reason, and the mapper is as new.
+TEST_F(MobileMapperTest, BrokenOrForeignSavedMapsAreRefused) {
+  MobileMapper source(testing::BumblebeeLikeCamera(), Params());
+  for (size_t i = 0; i < frames_->size() / 3; ++i) source.AddKeyFrame((*frames_)[i]);
+  source.Flush();
+  const std::string saved = source.SaveState();
+  const auto refused = [&](std::string_view bytes, const stereo::RectifiedGeometry& cam,
+                           const mobile_mapping::MobileMapperParams& p, const std::string& why) {
+    MobileMapper m(cam, p);
+    std::string reason;
+    EXPECT_FALSE(m.RestoreState(bytes, &reason)) << why;
+    EXPECT_NE(reason.find(why), std::string::npos) << reason;
+    EXPECT_FALSE(m.restore_unconfirmed());
+    EXPECT_TRUE(m.poses().empty());
+    EXPECT_TRUE(m.grid().empty());
+    EXPECT_TRUE(m.AddKeyFrame(frames_->front()).accepted);  // and it maps as a new one
+  };
+  const auto cam = testing::BumblebeeLikeCamera();
+  refused(std::string_view(saved).substr(0, saved.size() / 2), cam, Params(), "end early");
+  refused(std::string_view(saved).substr(0, saved.size() - 1), cam, Params(), "");
+  refused(saved + "x", cam, Params(), "follow the end mark");
+  refused("not saved maps at all", cam, Params(), "header");
+  std::string version = saved;
+  version[8] = 7;
+  refused(version, cam, Params(), "format version 7");
+  auto other_cam = cam;
+  other_cam.fx *= 1.01;
+  refused(saved, other_cam, Params(), "another camera");
+  auto coarse = Params();
+  coarse.grid.resolution_m = 0.2;
+  refused(saved, cam, coarse, "another lattice");
+  // Not into a mapper that has maps of its own.
+  MobileMapper busy(cam, Params());
+  ASSERT_TRUE(busy.AddKeyFrame(frames_->front()).accepted);
+  std::string reason;
+  EXPECT_FALSE(busy.RestoreState(saved, &reason));
+  EXPECT_NE(reason.find("already"), std::string::npos);
+}
+
+// After a restart the odometry may not be the frame the saved maps are in (the base restarted
+// its odometry, the robot was carried): the first key frame tells, and new maps start.
+TEST_F(MobileMapperTest, RestoredMapsAreDroppedWhenTheOdometryDoesNotContinue) {
+  MobileMapper source(testing::BumblebeeLikeCamera(), Params());
+  const size_t k = frames_->size() / 2;
+  for (size_t i = 0; i < k; ++i) source.AddKeyFrame((*frames_)[i]);
+  source.Flush();
+  const std::string saved = source.SaveState();
+
+  // A stamp from before the saved run's last one (another clock, a replay from the start).
+  MobileMapper replay(testing::BumblebeeLikeCamera(), Params());
+  ASSERT_TRUE(replay.RestoreState(saved, nullptr));
+  auto r = replay.AddKeyFrame(frames_->front());
+  ASSERT_TRUE(r.accepted);
+  ASSERT_TRUE(r.restored_maps_dropped.has_value());
+  EXPECT_NE(r.restored_maps_dropped->find("not after"), std::string::npos);
+  EXPECT_EQ(replay.poses().records().size(), 1u);
+  EXPECT_EQ(replay.counters().views, 0u);
+  EXPECT_FALSE(replay.restore_unconfirmed());
+
+  // Odometry restarted at zero, far from where the saved run stopped.
+  MobileMapper carried(testing::BumblebeeLikeCamera(), Params());
+  ASSERT_TRUE(carried.RestoreState(saved, nullptr));
+  KeyFrame f = (*frames_)[k];
+  f.T_odom_base = MakePose(5.0, 0.0, 0.0) * f.T_odom_base;
+  r = carried.AddKeyFrame(f);
+  ASSERT_TRUE(r.accepted);
+  ASSERT_TRUE(r.restored_maps_dropped.has_value());
+  EXPECT_NE(r.restored_maps_dropped->find("odometry moved"), std::string::npos);
+  EXPECT_EQ(carried.poses().records().size(), 1u);
+
+  // A key frame refused for another reason decides nothing; the next good one confirms.
+  MobileMapper resumed(testing::BumblebeeLikeCamera(), Params());
+  ASSERT_TRUE(resumed.RestoreState(saved, nullptr));
+  KeyFrame small = (*frames_)[k];
+  cv::resize(small.left, small.left, {}, 0.5, 0.5);
+  EXPECT_FALSE(resumed.AddKeyFrame(small).accepted);
+  EXPECT_TRUE(resumed.restore_unconfirmed());
+  r = resumed.AddKeyFrame((*frames_)[k]);
+  ASSERT_TRUE(r.accepted);
+  EXPECT_FALSE(r.restored_maps_dropped.has_value());
+  EXPECT_EQ(resumed.poses().records().size(), source.poses().records().size() + 1);
 }
 
 TEST(MobileMapper, BadConfigurationIsRefused) {
