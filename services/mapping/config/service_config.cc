@@ -185,6 +185,8 @@ void Apply(const YAML::Node& root, ServiceConfig& c) {
     s.Get("map_frame", c.maps.map_frame);
     s.Get("odom_frame", c.maps.odom_frame);
     s.Get("grid_publish_period_s", c.maps.grid_publish_period_s);
+    s.Get("persist", c.maps.persist);
+    s.Get("save_period_s", c.maps.save_period_s);
     s.RejectUnknownKeys();
   }
   {
@@ -288,6 +290,9 @@ void ServiceConfig::Validate() const {
     }
     if (!(m.grid_publish_period_s > 0) || !std::isfinite(m.grid_publish_period_s)) {
       bad("maps.grid_publish_period_s must be a positive number of seconds");
+    }
+    if (!(m.save_period_s >= 0) || !std::isfinite(m.save_period_s)) {
+      bad("maps.save_period_s must be a number of seconds >= 0");
     }
   }
   static const std::set<std::string> kLevels{"trace", "debug", "info", "warn", "error"};
@@ -451,6 +456,8 @@ std::string ToYaml(const ServiceConfig& c) {
   out << YAML::Key << "map_frame" << YAML::Value << c.maps.map_frame;
   out << YAML::Key << "odom_frame" << YAML::Value << c.maps.odom_frame;
   out << YAML::Key << "grid_publish_period_s" << YAML::Value << c.maps.grid_publish_period_s;
+  out << YAML::Key << "persist" << YAML::Value << c.maps.persist;
+  out << YAML::Key << "save_period_s" << YAML::Value << c.maps.save_period_s;
   out << YAML::EndMap;
   out << YAML::Key << "log" << YAML::Value << YAML::BeginMap << YAML::Key << "level" << YAML::Value
       << c.log_level << YAML::EndMap;

@@ -99,6 +99,12 @@ struct MapsSettings {
   std::string map_frame = "map";
   std::string odom_frame = "odom";
   double grid_publish_period_s = 1.0;  // the grid at most this often (it changes per key frame)
+  // Durable maps (needs state.dir): the maps are saved to <state.dir>/maps.sqlite3 when a stop
+  // has joined them, at most every save_period_s, and at shutdown; a restarted epmapd resumes
+  // them when its first key frame continues the saved run (same odometry frame: later stamp, no
+  // jump; mobile_mapping::MobileMapper::RestoreState), else starts new ones. false: neither.
+  bool persist = true;
+  double save_period_s = 5.0;
 };
 
 struct ServiceConfig {

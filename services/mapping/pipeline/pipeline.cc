@@ -148,6 +148,8 @@ void Pipeline::Stop() {
   sensors_.Interrupt();
   if (thread_.joinable()) thread_.join();
   unexpected_hub_.Close();
+  SaveMaps(true);  // the stops merged since the last save (the thread is gone: no race)
+  if (maps_store_) maps_store_->Flush();
 }
 
 std::string Pipeline::mode() const {

@@ -4,6 +4,7 @@
 // odometry), computes the disparity and publishes an immutable snapshot.
 
 #include <atomic>
+#include <chrono>
 #include <memory>
 #include <optional>
 #include <set>
@@ -24,6 +25,7 @@
 #include "services/mapping/ingest/bounded_queue.h"
 #include "services/mapping/ingest/dds_ingest.h"
 #include "services/mapping/ingest/sensor_state.h"
+#include "services/mapping/maps_store/maps_store.h"
 #include "services/mapping/pipeline/map_snapshot.h"
 #include "services/mapping/pipeline/stage_stats.h"
 #include "services/mapping/pipeline/unexpected_events.h"
@@ -131,6 +133,17 @@ class Pipeline {
   std::optional<mobile_mapping::KeyFrameSelector> key_frames_;
   std::vector<mobile_mapping::JointLimit> joint_limits_;  // of the chain's joints, from the URDF
   std::shared_ptr<const mobile_mapping::MapsSnapshot> maps_;
+  // Durable maps (maps.persist with state.dir; pipeline_maps.cc): opened with the first mapper,
+  // which resumes what it holds.
+  std::unique_ptr<MapsStore> maps_store_;
+  bool maps_store_opened_ = false;
+  uint64_t maps_saved_stops_ = 0;  // stops merged into the maps when they were last saved
+  std::chrono::steady_clock::time_point maps_saved_at_;
+  // Opens the store and has the new mapper_ take over the saved maps, once per process.
+  void ResumeSavedMaps();
+  // Hands the maps to the store when a stop joined them since the last save (and, unless
+  // `now_regardless`, save_period_s has passed).
+  void SaveMaps(bool now_regardless);
 
   const ActiveModels* active_models_ = nullptr;
   RawFrameTap* frame_tap_ = nullptr;

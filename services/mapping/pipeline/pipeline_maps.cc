@@ -35,7 +35,58 @@ mobile_mapping::MobileMapperParams MakeMapperParams(
   return p;
 }
 
+uint64_t MergedStops(const mobile_mapping::MapperCounters& c) {
+  return c.views + c.views_without_objects;
+}
+
 }  // namespace
+
+void Pipeline::ResumeSavedMaps() {
+  if (maps_store_opened_) return;
+  maps_store_opened_ = true;
+  if (!config_.maps.persist || config_.state_dir.empty()) return;
+  try {
+    maps_store_ = std::make_unique<MapsStore>(config_.state_dir, events_);
+    const auto saved = maps_store_->Load();
+    if (!saved) return;
+    std::string reason;
+    if (mapper_->RestoreState(saved->bytes, &reason)) {
+      events_.Increment("maps_resumed");
+      maps_saved_stops_ = MergedStops(mapper_->counters());
+      spdlog::info(
+          "maps: resuming the saved maps of {} ({} key frames, {} views, {} segments); the first "
+          "key frame decides whether the odometry continues them",
+          maps_store_->path().string(), saved->key_frames, mapper_->counters().views,
+          mapper_->perceptual().Map(false).segments.size());
+    } else {
+      events_.Increment("maps_saved_not_resumed");
+      spdlog::warn("maps: the saved maps in {} are not resumed, new maps start: {}",
+                   maps_store_->path().string(), reason);
+    }
+  } catch (const std::exception& e) {
+    // The maps still work, in memory only.
+    events_.Increment("maps_store_unavailable");
+    spdlog::error("maps: no durable maps: {}", e.what());
+    maps_store_.reset();
+  }
+}
+
+void Pipeline::SaveMaps(bool now_regardless) {
+  if (!maps_store_ || !mapper_ || mapper_->restore_unconfirmed()) return;
+  const uint64_t merged = MergedStops(mapper_->counters());
+  if (merged == maps_saved_stops_) return;  // nothing new since the last save
+  const auto now = Clock::now();
+  if (!now_regardless &&
+      now - maps_saved_at_ < std::chrono::duration<double>(config_.maps.save_period_s)) {
+    return;
+  }
+  const auto t0 = Clock::now();
+  maps_store_->Offer(mapper_->SaveState(), mapper_->counters().key_frames);
+  stage_ms_.Add("maps.save_state",
+                std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+  maps_saved_stops_ = merged;
+  maps_saved_at_ = now;
+}
 
 void Pipeline::RunMaps(const StereoFrame& frame, const stereo::Rectifier& rectifier,
                        const cv::Mat& left, const cv::Mat& right, MapSnapshot& snapshot) {
@@ -101,6 +152,8 @@ void Pipeline::RunMaps(const StereoFrame& frame, const stereo::Rectifier& rectif
     if (mapper_) events_.Increment("maps_restarted_new_rectification");
     mapper_ = std::make_unique<mobile_mapping::MobileMapper>(
         rectifier.geometry(), MakeMapperParams(config_.maps, joint_limits_));
+    maps_saved_stops_ = 0;
+    ResumeSavedMaps();  // the first mapper of this process takes over the saved maps
   }
 
   const auto t0 = Clock::now();
@@ -120,7 +173,14 @@ void Pipeline::RunMaps(const StereoFrame& frame, const stereo::Rectifier& rectif
                  r ? r->message : std::string("no reason given"));
     return;
   }
+  if (report.restored_maps_dropped) {
+    events_.Increment("maps_resume_dropped");
+    spdlog::warn("maps: the saved maps are not this odometry's, new maps start: {}",
+                 *report.restored_maps_dropped);
+    maps_saved_stops_ = 0;
+  }
   events_.Increment("maps_key_frames");
+  if (report.group_closed) SaveMaps(false);
   if (report.edge_points == 0) events_.Increment("maps_key_frame_without_edges");
   if (report.view_skipped) events_.Increment("maps_view_without_objects");
   if (report.shifted) events_.Increment("maps_correlation_shifts");

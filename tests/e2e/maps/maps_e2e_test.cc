@@ -15,7 +15,9 @@
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cmath>
+#include <csignal>
 #include <fstream>
 #include <functional>
 #include <future>
@@ -487,8 +489,9 @@ class MobileBasePublisher {
 class MapsFromPublishedFrames : public ::testing::Test {
  protected:
   // `edit_urdf`, if given, changes the recorded robot's URDF before epmapd loads it.
+  // With `durable`, epmapd keeps its state (and so its maps) in <work>/state.
   void Start(const std::string& name, uint32_t domain_salt,
-             const std::function<std::string(std::string)>& edit_urdf = {}) {
+             const std::function<std::string(std::string)>& edit_urdf = {}, bool durable = false) {
     work_ = testing::FreshTempDir(name);
     const auto& work = work_;
     const uint32_t domain = testing::UniqueDomainId(domain_salt);
@@ -504,10 +507,26 @@ class MapsFromPublishedFrames : public ::testing::Test {
       std::ofstream(edited) << edit_urdf(ReadText(urdf));
       urdf = edited;
     }
-    epmapd_ = std::make_unique<testing::Epmapd>(
-        domain, std::vector<std::string>{"--urdf", urdf.string()}, work);
+    domain_ = domain;
+    epmapd_args_ = {"--urdf", urdf.string()};
+    if (durable)
+      epmapd_args_.insert(epmapd_args_.end(), {"--state-dir", (work / "state").string()});
+    epmapd_ = std::make_unique<testing::Epmapd>(domain, epmapd_args_, work);
     ASSERT_TRUE(epmapd_->WaitReady()) << epmapd_->process().Output();
     pub_ = std::make_unique<MobileBasePublisher>(domain);
+    ASSERT_TRUE(pub_->WaitMatched());
+  }
+  // Stops epmapd cleanly (SIGTERM, exit 0) and starts it again with the same arguments; its
+  // log of the run before is kept as `log_name`.
+  void Restart(const std::string& log_name) {
+    epmapd_->process().Signal(SIGTERM);
+    const auto code = epmapd_->process().Wait(std::chrono::seconds(20));
+    ASSERT_TRUE(code.has_value()) << "epmapd did not stop on SIGTERM";
+    EXPECT_EQ(*code, 0) << epmapd_->process().Output();
+    epmapd_.reset();
+    std::filesystem::rename(work_ / "epmapd.log", work_ / log_name);
+    epmapd_ = std::make_unique<testing::Epmapd>(domain_, epmapd_args_, work_);
+    ASSERT_TRUE(epmapd_->WaitReady()) << epmapd_->process().Output();
     ASSERT_TRUE(pub_->WaitMatched());
   }
   // The status once the maps have taken at least n key frames (or after 30 s).
@@ -528,6 +547,8 @@ class MapsFromPublishedFrames : public ::testing::Test {
   }
 
   std::filesystem::path work_;
+  uint32_t domain_ = 0;
+  std::vector<std::string> epmapd_args_;
   std::unique_ptr<testing::Epmapd> epmapd_;
   std::unique_ptr<MobileBasePublisher> pub_;
 };
@@ -677,6 +698,77 @@ TEST_F(MapsFromPublishedFrames, AStopUnderWayIsServedBeforeTheBaseMovesOn) {
   EXPECT_FALSE(after.includes_open_stop());
   EXPECT_EQ(after.views_size(), during.views_size());
   EXPECT_EQ(after.segments_size(), during.segments_size());
+}
+
+// The maps are durable (state dir): after a clean restart, epmapd goes on with the maps it
+// had when the odometry continues; when the odometry starts over somewhere else, new maps.
+TEST_F(MapsFromPublishedFrames, TheMapsSurviveARestart) {
+  ASSERT_NO_FATAL_FAILURE(Start("maps-restart", 66, {}, /*durable=*/true));
+  const auto stamp = &Stamp;
+  const auto perceptual_map = [this] {
+    grpc::ClientContext context;
+    v1::PerceptualMap map;
+    EXPECT_TRUE(epmapd_->stub().GetPerceptualMap(&context, {}, &map).ok());
+    return map;
+  };
+  const auto pose = [this] {
+    grpc::ClientContext context;
+    v1::PoseEstimate p;
+    EXPECT_TRUE(epmapd_->stub().GetPose(&context, {}, &p).ok());
+    return p;
+  };
+  const auto events = [this](const char* name) {
+    v1::ServiceStatus status;
+    EXPECT_TRUE(epmapd_->Status(&status).ok());
+    return testing::Epmapd::Count(status.events(), name);
+  };
+  // Two panning stops (x = 0 and 0.5), then on to x = 1: both stops join the maps.
+  int i = 0;
+  for (const double pan : {0.0, 0.3, 0.6, 0.9}) pub_->Frame(stamp(i++), 0.0, pan, false);
+  for (const double pan : {0.6, 0.3, 0.0}) pub_->Frame(stamp(i++), 0.5, pan, false);
+  pub_->Frame(stamp(i++), 1.0, 0.0, false);
+  ASSERT_EQ(testing::Epmapd::Count(WaitForKeyFrames(8).events(), "maps_key_frames"), 8u);
+  const v1::PerceptualMap before = perceptual_map();
+  const v1::PoseEstimate pose_before = pose();
+  ASSERT_FALSE(before.includes_open_stop());
+  ASSERT_GE(before.views_size(), 2);
+  ASSERT_GT(before.segments_size(), 0);
+
+  // A clean restart; the robot drives on in the same odometry frame.
+  ASSERT_NO_FATAL_FAILURE(Restart("epmapd-1.log"));
+  EXPECT_TRUE(std::filesystem::exists(work_ / "state" / "maps.sqlite3"));
+  pub_->Frame(stamp(i++), 1.3, 0.0, false);
+  WaitForKeyFrames(1);
+  EXPECT_EQ(events("maps_resumed"), 1u);
+  EXPECT_EQ(events("maps_resume_dropped"), 0u);
+  const v1::PerceptualMap resumed = perceptual_map();
+  const v1::PoseEstimate pose_resumed = pose();
+  EXPECT_EQ(pose_resumed.keyframes(), pose_before.keyframes() + 1);
+  EXPECT_GE(resumed.views_size(), before.views_size());
+  // Every segment of before is there, with its id and ends.
+  ASSERT_GE(resumed.segments_size(), before.segments_size());
+  for (const auto& old : before.segments()) {
+    const auto same = std::find_if(
+        resumed.segments().begin(), resumed.segments().end(), [&](const v1::MapSegment& s) {
+          return s.id() == old.id() && s.x1() == old.x1() && s.y1() == old.y1() &&
+                 s.x2() == old.x2() && s.y2() == old.y2();
+        });
+    EXPECT_NE(same, resumed.segments().end()) << "segment " << old.id() << " is gone";
+  }
+  // The correction carries over: the corrected pose is the odometry's step on from the last one.
+  EXPECT_NEAR(pose_resumed.difference().theta(), pose_before.difference().theta(), 0.05);
+
+  // Another restart, and the odometry starts over 5 m away (the base was carried, or restarted
+  // its odometry): the saved maps are not this odometry's, and new maps start.
+  ASSERT_NO_FATAL_FAILURE(Restart("epmapd-2.log"));
+  pub_->Frame(stamp(i++), 6.3, 0.0, false);
+  WaitForKeyFrames(1);
+  EXPECT_EQ(events("maps_resumed"), 1u);
+  EXPECT_EQ(events("maps_resume_dropped"), 1u);
+  EXPECT_EQ(pose().keyframes(), 1u);
+  EXPECT_EQ(perceptual_map().segments_size(), 0);
+  const std::string log = ReadText(work_ / "epmapd.log");
+  EXPECT_NE(log.find("not this odometry's"), std::string::npos) << log;
 }
 
 // A planner that has the maps waits for the next ones instead of polling: the call returns when

@@ -126,6 +126,21 @@ TEST(ServiceConfig, RosOutputTopicsAndFramesAreReadAndChecked) {
   EXPECT_THROW(d.Validate(), std::invalid_argument);
 }
 
+TEST(ServiceConfig, DurableMapsSettings) {
+  ServiceConfig c;
+  EXPECT_TRUE(c.maps.persist);
+  mapping::ApplyYaml("maps:\n  persist: false\n  save_period_s: 30\n", c);
+  EXPECT_FALSE(c.maps.persist);
+  EXPECT_DOUBLE_EQ(c.maps.save_period_s, 30);
+  EXPECT_NO_THROW(c.Validate());
+  ServiceConfig back;
+  mapping::ApplyYaml(mapping::ToYaml(c), back);
+  EXPECT_FALSE(back.maps.persist);
+  EXPECT_DOUBLE_EQ(back.maps.save_period_s, 30);
+  c.maps.save_period_s = -1;
+  EXPECT_THROW(c.Validate(), std::invalid_argument);
+}
+
 TEST(ServiceConfig, CameraLinksOfARobotsOwnUrdf) {
   ServiceConfig c;
   EXPECT_EQ(c.left_camera_link, "cam0_optical");  // the dataset layout's names by default

@@ -1,0 +1,53 @@
+// The maps' durable store (services/mapping/maps_store): a real SQLite file in a fresh folder.
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "services/mapping/maps_store/maps_store.h"
+#include "tests/support/test_env.h"
+
+namespace epmap::mapping {
+namespace {
+
+TEST(MapsStore, KeepsTheNewestSavedMapsAcrossReopening) {
+  const auto dir = testing::FreshTempDir("maps-store") / "state";  // made by the store
+  CounterSet events;
+  {
+    MapsStore store(dir, events);
+    EXPECT_FALSE(store.Load().has_value());  // nothing saved yet
+    store.Offer(std::string("first\0state", 11), 3);
+    store.Flush();
+    const auto saved = store.Load();
+    ASSERT_TRUE(saved.has_value());
+    EXPECT_EQ(saved->bytes, std::string("first\0state", 11));  // bytes, not text
+    EXPECT_EQ(saved->key_frames, 3u);
+    EXPECT_GT(saved->saved_unix_ns, 0);
+    // Offers faster than the disk: the newest wins, none is torn.
+    for (int i = 0; i < 50; ++i) store.Offer(std::string(1000 + i, 'a' + i % 26), 10 + i);
+  }  // the destructor writes what is pending
+  EXPECT_TRUE(std::filesystem::exists(dir / MapsStore::kFileName));
+  EXPECT_GE(events.Get("maps_saved"), 2u);
+  EXPECT_EQ(events.Get("maps_save_failed"), 0u);
+  MapsStore reopened(dir, events);
+  const auto saved = reopened.Load();
+  ASSERT_TRUE(saved.has_value());
+  EXPECT_EQ(saved->key_frames, 59u);
+  EXPECT_EQ(saved->bytes, std::string(1049, 'a' + 49 % 26));
+}
+
+TEST(MapsStore, AFolderThatCannotBeMadeIsAClearError) {
+  const auto dir = testing::FreshTempDir("maps-store-bad");
+  std::ofstream(dir / "file") << "not a folder";
+  CounterSet events;
+  try {
+    MapsStore store(dir / "file" / "state", events);
+    FAIL() << "a folder under a file must be refused";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("cannot create"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace epmap::mapping
