@@ -228,6 +228,11 @@ struct RunResult {
   std::vector<double> key_frame_ms;
   std::vector<double> snapshot_ms;  // building the readers' snapshot after a key frame
   std::vector<double> sgbm_ms;
+  // The maps as epmapd saves them at the end of the run (maps.persist): size, time to save
+  // and to restore, and whether a restored mapper saves the very same bytes.
+  size_t state_bytes = 0;
+  std::vector<double> save_ms, restore_ms;
+  bool state_round_trip_exact = false;
 };
 
 RunResult Run(const Prepared& p, epmap::mobile_mapping::MobileMapperParams params, bool time_sgbm,
@@ -273,6 +278,22 @@ RunResult Run(const Prepared& p, epmap::mobile_mapping::MobileMapperParams param
   }
   mapper.Flush();
   out.maps = mapper.Snapshot();
+  if (time_sgbm) {
+    std::string saved;
+    for (int i = 0; i < 5; ++i) {
+      const auto s0 = std::chrono::steady_clock::now();
+      saved = mapper.SaveState();
+      out.save_ms.push_back(
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - s0).count());
+      epmap::mobile_mapping::MobileMapper restored(p.camera, params);
+      const auto r0 = std::chrono::steady_clock::now();
+      const bool ok = restored.RestoreState(saved, nullptr);
+      out.restore_ms.push_back(
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - r0).count());
+      out.state_round_trip_exact = ok && restored.SaveState() == saved;
+    }
+    out.state_bytes = saved.size();
+  }
   return out;
 }
 
@@ -1146,6 +1167,12 @@ int RunCommand(int argc, char** argv) {
       << ",\"target_ms\":100,\"baseline\":\"full-frame SGBM (64 disparities, block 5) on the "
          "same key frames\",\"baseline_sgbm_ms_median\":"
       << FormatFixed(sg, 2) << ",\"ratio_to_baseline\":" << FormatFixed(med / sg, 3) << "}";
+    j << ",\"durable_state\":{\"bytes\":" << main.state_bytes
+      << ",\"save_ms_median\":" << FormatFixed(Median(main.save_ms), 2)
+      << ",\"restore_ms_median\":" << FormatFixed(Median(main.restore_ms), 2)
+      << ",\"baseline\":\"per key frame ms median\",\"save_ratio_to_baseline\":"
+      << FormatFixed(Median(main.save_ms) / med, 3)
+      << ",\"round_trip_exact\":" << (main.state_round_trip_exact ? "true" : "false") << "}";
     // The EP ran on every frame before the maps (as in epmapd); its time is not per key frame.
     j << ",\"motion_mask\":{\"enabled\":" << (no_motion_mask ? "false" : "true")
       << ",\"ep_frames\":" << masks.frames << ",\"key_frames_masked\":" << masks.by_frame.size()

@@ -41,7 +41,8 @@ TEST(MapsBench, WritesTheMapsAndTheFigures) {
         "\"no_heading_correction\":", "\"per_key_frame_ms_median\":",
         "\"baseline_sgbm_ms_median\":", "\"correlation\":{\"enabled\":true,\"shifts_applied\":",
         "\"by_layer\":[{\"from_m\":0.10,\"to_m\":0.70,\"walls\":{\"iou\":",
-        "\"iou_by_unknown_below\":{\"0.05\":{\"iou\":", "\"resolution_m\":0.100,"}) {
+        "\"iou_by_unknown_below\":{\"0.05\":{\"iou\":", "\"resolution_m\":0.100,",
+        "\"durable_state\":{\"bytes\":", "\"round_trip_exact\":true"}) {
     EXPECT_NE(figures.find(key), std::string::npos) << key << " missing in " << figures;
   }
   EXPECT_EQ(figures.find("null"), std::string::npos) << figures;
