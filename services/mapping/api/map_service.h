@@ -41,6 +41,8 @@ class MapServiceImpl final : public v1::MapService::Service {
   grpc::Status GetOccupancyGrid(grpc::ServerContext* context,
                                 const v1::GetOccupancyGridRequest* request,
                                 v1::OccupancyGrid* response) override;
+  grpc::Status ResetMaps(grpc::ServerContext* context, const v1::ResetMapsRequest* request,
+                         v1::ResetMapsResponse* response) override;
   grpc::Status GetPose(grpc::ServerContext* context, const v1::GetPoseRequest* request,
                        v1::PoseEstimate* response) override;
 

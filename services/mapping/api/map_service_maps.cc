@@ -171,6 +171,23 @@ grpc::Status MapServiceImpl::GetOccupancyGrid(grpc::ServerContext* context,
   return grpc::Status::OK;
 }
 
+grpc::Status MapServiceImpl::ResetMaps(grpc::ServerContext*, const v1::ResetMapsRequest*,
+                                       v1::ResetMapsResponse* out) {
+  if (!service_.config().maps.enabled) {
+    return {grpc::StatusCode::FAILED_PRECONDITION, "the maps are disabled (maps.enabled: false)"};
+  }
+  if (const auto latest = service_.snapshots().Latest(); latest && latest->maps) {
+    out->set_key_frames_dropped(latest->maps->counters.key_frames);
+  }
+  try {
+    out->set_saved_maps_cleared(service_.pipeline().RequestMapsReset());
+  } catch (const std::exception& e) {
+    return {grpc::StatusCode::INTERNAL,
+            std::string("the saved maps could not be cleared: ") + e.what()};
+  }
+  return grpc::Status::OK;
+}
+
 grpc::Status MapServiceImpl::GetPose(grpc::ServerContext* context,
                                      const v1::GetPoseRequest* request, v1::PoseEstimate* out) {
   std::shared_ptr<const mobile_mapping::MapsSnapshot> maps;

@@ -101,6 +101,18 @@ void MapsStore::Flush() {
   changed_.wait(lock, [&] { return (!pending_ && !writing_) || stop_; });
 }
 
+void MapsStore::Clear() {
+  {
+    std::unique_lock lock(mutex_);
+    pending_.reset();
+    changed_.wait(lock, [&] { return !writing_ || stop_; });
+  }
+  std::lock_guard lock(db_mutex_);
+  if (sqlite3_exec(db_, "DELETE FROM maps", nullptr, nullptr, nullptr) != SQLITE_OK) {
+    throw std::runtime_error(Error(db_, "cannot clear the saved maps"));
+  }
+}
+
 void MapsStore::Run() {
   std::unique_lock lock(mutex_);
   for (;;) {

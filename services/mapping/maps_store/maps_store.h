@@ -43,6 +43,9 @@ class MapsStore {
   void Offer(std::string bytes, uint64_t key_frames);
   // Returns once every offered state is written (or failed).
   void Flush();
+  // Forgets the saved maps: a state offered and not yet written is dropped, one being written
+  // is waited for, then the row is deleted. Throws std::runtime_error when it cannot delete.
+  void Clear();
 
   const std::filesystem::path& path() const { return path_; }
 

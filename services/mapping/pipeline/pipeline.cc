@@ -56,6 +56,7 @@ Pipeline::Pipeline(const ServiceConfig& config, BoundedQueue<StereoFrame>& queue
     }
   }
   SetUpPoseSource();
+  OpenMapsStore();
 }
 
 void Pipeline::WarnOnce(const std::string& event, const std::string& message) {
@@ -148,7 +149,8 @@ void Pipeline::Stop() {
   sensors_.Interrupt();
   if (thread_.joinable()) thread_.join();
   unexpected_hub_.Close();
-  SaveMaps(true);  // the stops merged since the last save (the thread is gone: no race)
+  ApplyMapsReset();  // one asked for after the last frame
+  SaveMaps(true);    // the stops merged since the last save (the thread is gone: no race)
   if (maps_store_) maps_store_->Flush();
 }
 

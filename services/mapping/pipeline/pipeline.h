@@ -6,6 +6,7 @@
 #include <atomic>
 #include <chrono>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <set>
 #include <string>
@@ -60,6 +61,11 @@ class Pipeline {
   // through which stereo-extrinsics jobs see raw frames. Call before Start().
   void AttachCalibration(const ActiveModels* models, RawFrameTap* tap,
                          double rectification_rebuild_deg);
+
+  // ResetMaps (any thread): the saved maps are cleared now, the maps in memory at the next
+  // frame (or at Stop). Returns whether there were durable maps to clear; throws
+  // std::runtime_error when they could not be cleared.
+  bool RequestMapsReset();
 
  private:
   void Run();
@@ -133,13 +139,20 @@ class Pipeline {
   std::optional<mobile_mapping::KeyFrameSelector> key_frames_;
   std::vector<mobile_mapping::JointLimit> joint_limits_;  // of the chain's joints, from the URDF
   std::shared_ptr<const mobile_mapping::MapsSnapshot> maps_;
-  // Durable maps (maps.persist with state.dir; pipeline_maps.cc): opened with the first mapper,
-  // which resumes what it holds.
+  // Durable maps (maps.persist with state.dir; pipeline_maps.cc): opened at construction (set
+  // once, then shared with RequestMapsReset); the first mapper resumes what it holds.
   std::unique_ptr<MapsStore> maps_store_;
-  bool maps_store_opened_ = false;
+  bool maps_resume_tried_ = false;
+  // A reset asked for and not yet done; taken with each save so that no save of the old maps
+  // lands after the store was cleared.
+  std::mutex maps_reset_mutex_;
+  bool maps_reset_requested_ = false;
+  // Drops the maps in memory if a reset was asked for (pipeline thread, or after it stopped).
+  void ApplyMapsReset();
   uint64_t maps_saved_stops_ = 0;  // stops merged into the maps when they were last saved
   std::chrono::steady_clock::time_point maps_saved_at_;
-  // Opens the store and has the new mapper_ take over the saved maps, once per process.
+  void OpenMapsStore();  // at construction
+  // Has the new mapper_ take over the saved maps, once per process.
   void ResumeSavedMaps();
   // Hands the maps to the store when a stop joined them since the last save (and, unless
   // `now_regardless`, save_period_s has passed).

@@ -41,12 +41,45 @@ uint64_t MergedStops(const mobile_mapping::MapperCounters& c) {
 
 }  // namespace
 
-void Pipeline::ResumeSavedMaps() {
-  if (maps_store_opened_) return;
-  maps_store_opened_ = true;
-  if (!config_.maps.persist || config_.state_dir.empty()) return;
+void Pipeline::OpenMapsStore() {
+  if (!config_.maps.enabled || !config_.maps.persist || config_.state_dir.empty()) return;
   try {
     maps_store_ = std::make_unique<MapsStore>(config_.state_dir, events_);
+  } catch (const std::exception& e) {
+    // The maps still work, in memory only.
+    events_.Increment("maps_store_unavailable");
+    spdlog::error("maps: no durable maps: {}", e.what());
+  }
+}
+
+bool Pipeline::RequestMapsReset() {
+  std::lock_guard lock(maps_reset_mutex_);
+  maps_reset_requested_ = true;
+  if (!maps_store_) return false;
+  maps_store_->Clear();
+  return true;
+}
+
+void Pipeline::ApplyMapsReset() {
+  {
+    std::lock_guard lock(maps_reset_mutex_);
+    if (!maps_reset_requested_) return;
+    maps_reset_requested_ = false;
+  }
+  mapper_.reset();
+  key_frames_.reset();
+  maps_.reset();
+  maps_saved_stops_ = 0;
+  maps_resume_tried_ = true;  // nothing left to resume
+  events_.Increment("maps_reset");
+  spdlog::info("maps: reset on request; the next key frames start new maps");
+}
+
+void Pipeline::ResumeSavedMaps() {
+  if (maps_resume_tried_) return;
+  maps_resume_tried_ = true;
+  if (!maps_store_) return;
+  try {
     const auto saved = maps_store_->Load();
     if (!saved) return;
     std::string reason;
@@ -64,10 +97,8 @@ void Pipeline::ResumeSavedMaps() {
                    maps_store_->path().string(), reason);
     }
   } catch (const std::exception& e) {
-    // The maps still work, in memory only.
-    events_.Increment("maps_store_unavailable");
-    spdlog::error("maps: no durable maps: {}", e.what());
-    maps_store_.reset();
+    events_.Increment("maps_saved_not_resumed");
+    spdlog::error("maps: the saved maps cannot be read, new maps start: {}", e.what());
   }
 }
 
@@ -80,6 +111,8 @@ void Pipeline::SaveMaps(bool now_regardless) {
       now - maps_saved_at_ < std::chrono::duration<double>(config_.maps.save_period_s)) {
     return;
   }
+  std::lock_guard lock(maps_reset_mutex_);
+  if (maps_reset_requested_) return;  // these maps are about to go: never save them again
   const auto t0 = Clock::now();
   maps_store_->Offer(mapper_->SaveState(), mapper_->counters().key_frames);
   stage_ms_.Add("maps.save_state",
@@ -90,6 +123,7 @@ void Pipeline::SaveMaps(bool now_regardless) {
 
 void Pipeline::RunMaps(const StereoFrame& frame, const stereo::Rectifier& rectifier,
                        const cv::Mat& left, const cv::Mat& right, MapSnapshot& snapshot) {
+  ApplyMapsReset();
   snapshot.maps = maps_;  // unchanged until a key frame is accepted
   if (!chain_) {
     // Without the chain from the base to the camera the points cannot be placed on the floor.

@@ -769,6 +769,25 @@ TEST_F(MapsFromPublishedFrames, TheMapsSurviveARestart) {
   EXPECT_EQ(perceptual_map().segments_size(), 0);
   const std::string log = ReadText(work_ / "epmapd.log");
   EXPECT_NE(log.find("not this odometry's"), std::string::npos) << log;
+
+  // A planner resets the maps: the saved ones (still the first run's) are cleared at once, the
+  // served ones at the next frame, which starts new maps; a restart then has nothing to resume.
+  const auto [code, out] = testing::RunToCompletion(
+      testing::BinDir() / "epmapctl", {"--server", epmapd_->address(), "reset-maps", "--json"},
+      work_ / "ctl-reset.log", std::chrono::seconds(30));
+  ASSERT_EQ(code, 0) << out;
+  EXPECT_NE(out.find("{\"key_frames_dropped\":1,\"saved_maps_cleared\":true}"), std::string::npos)
+      << out;
+  pub_->Frame(stamp(i++), 6.6, 0.0, false);
+  WaitForKeyFrames(2);
+  EXPECT_EQ(events("maps_reset"), 1u);
+  EXPECT_EQ(pose().keyframes(), 1u);
+  ASSERT_NO_FATAL_FAILURE(Restart("epmapd-3.log"));
+  pub_->Frame(stamp(i++), 6.9, 0.0, false);
+  WaitForKeyFrames(1);
+  EXPECT_EQ(events("maps_resumed"), 0u);
+  EXPECT_EQ(events("maps_resume_dropped"), 0u);
+  EXPECT_EQ(pose().keyframes(), 1u);
 }
 
 // A planner that has the maps waits for the next ones instead of polling: the call returns when

@@ -37,6 +37,24 @@ TEST(MapsStore, KeepsTheNewestSavedMapsAcrossReopening) {
   EXPECT_EQ(saved->bytes, std::string(1049, 'a' + 49 % 26));
 }
 
+TEST(MapsStore, ClearForgetsTheSavedAndThePendingMaps) {
+  const auto dir = testing::FreshTempDir("maps-store-clear");
+  CounterSet events;
+  MapsStore store(dir, events);
+  store.Offer("old maps", 5);
+  store.Flush();
+  ASSERT_TRUE(store.Load().has_value());
+  store.Offer(std::string(1 << 20, 'x'), 6);  // perhaps still pending: dropped, or deleted
+  store.Clear();
+  EXPECT_FALSE(store.Load().has_value());
+  store.Flush();
+  EXPECT_FALSE(store.Load().has_value());
+  store.Offer("new maps", 1);  // and saving goes on
+  store.Flush();
+  ASSERT_TRUE(store.Load().has_value());
+  EXPECT_EQ(store.Load()->bytes, "new maps");
+}
+
 TEST(MapsStore, AFolderThatCannotBeMadeIsAClearError) {
   const auto dir = testing::FreshTempDir("maps-store-bad");
   std::ofstream(dir / "file") << "not a folder";
