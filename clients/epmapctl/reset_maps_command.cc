@@ -25,7 +25,8 @@ int Run(const ClientOptions& options, bool json) {
   std::printf("maps reset: %llu key frames dropped at the next frame; %s\n",
               static_cast<unsigned long long>(response.key_frames_dropped()),
               response.saved_maps_cleared() ? "the saved maps are cleared"
-                                            : "no saved maps (no state dir, or maps.persist off)");
+                                            : "no durable maps (no state dir, maps.persist "
+                                              "off, or the store unavailable: see status)");
   return 0;
 }
 
