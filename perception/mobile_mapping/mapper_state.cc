@@ -199,9 +199,8 @@ std::string MobileMapper::SaveState() const {
   w.Put(grid_.min_iy());
   w.Put<int32_t>(grid_.width());
   w.Put<int32_t>(grid_.height());
-  const auto planes = grid_.Planes();
-  w.Put<uint64_t>(planes.size());
-  for (const auto& p : planes) {
+  w.Put<uint64_t>(grid_.planes().size());
+  for (const auto& p : grid_.planes()) {
     const bool weights = !p.hits.empty();
     w.Put<uint8_t>(weights);
     if (grid_.empty()) continue;

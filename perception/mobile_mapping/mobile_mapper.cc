@@ -199,18 +199,20 @@ void MobileMapper::ClearMaps() {
 
 KeyFrameReport MobileMapper::AddKeyFrame(const KeyFrame& f) {
   KeyFrameReport report;
+  auto rejection = Check(f);
   if (restore_unconfirmed_) {
-    // The first key frame after a restore: does it continue the saved run?
-    auto rejection = Check(f);
+    // The first key frame after a restore: does it continue the saved run? If not, the maps
+    // start anew and it is checked again, as the first key frame of new maps.
     if (rejection &&
         (rejection->reason == "stamp_not_increasing" || rejection->reason == "odometry_jump")) {
       report.restored_maps_dropped = rejection->message;
       ClearMaps();
+      rejection = Check(f);
     } else if (!rejection) {
       restore_unconfirmed_ = false;
     }
   }
-  if (auto rejection = Check(f)) {
+  if (rejection) {
     ++counters_.rejected;
     ++counters_.rejected_by_reason[rejection->reason];
     report.rejection = std::move(rejection);

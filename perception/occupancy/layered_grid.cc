@@ -124,10 +124,6 @@ LayeredGrid& LayeredGrid::operator=(const LayeredGrid& other) {
   return *this;
 }
 
-std::vector<LayeredGrid::LayerPlanes> LayeredGrid::Planes() const {
-  return LayeredGrid(*this).layers_;  // the copy constructor clones every plane
-}
-
 void LayeredGrid::RestorePlanes(int64_t min_ix, int64_t min_iy, int width, int height,
                                 std::vector<LayerPlanes> planes) {
   const auto fail = [](const std::string& what) {

@@ -171,8 +171,8 @@ class LayeredGrid {
     // (passes). A merged (global) map has none (empty Mats): its memberships are averages.
     cv::Mat hits, passes;
   };
-  // Deep copies of every layer's cells (for saving a map: mobile_mapping's state).
-  std::vector<LayerPlanes> Planes() const;
+  // Every layer's cells, read-only (for saving a map: mobile_mapping's state).
+  const std::vector<LayerPlanes>& planes() const { return layers_; }
   // Replaces the cells with saved ones: lattice cell (min_ix + c, min_iy + r) is (c, r) of each
   // plane. Throws std::invalid_argument, leaving the grid as it was, when they do not fit this
   // grid: another layer count, planes not CV_32FC1 of height x width, memberships and

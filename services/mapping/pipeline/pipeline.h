@@ -105,6 +105,15 @@ class Pipeline {
   // snapshot (pipeline_maps.cc).
   void RunMaps(const StereoFrame& frame, const stereo::Rectifier& rectifier, const cv::Mat& left,
                const cv::Mat& right, MapSnapshot& snapshot);
+  // Durable maps (pipeline_maps.cc). OpenMapsStore: at construction. ResumeSavedMaps: the new
+  // mapper_ takes over the saved maps, once per process. SaveMaps: hands the maps to the store
+  // when a stop joined them since the last save (and, unless `now_regardless`, save_period_s
+  // has passed). ApplyMapsReset: drops the maps in memory if a reset was asked for (pipeline
+  // thread, or after it stopped).
+  void OpenMapsStore();
+  void ResumeSavedMaps();
+  void SaveMaps(bool now_regardless);
+  void ApplyMapsReset();
   // The rectifier under the active stereo model, or nullptr (with a counted rejection); only
   // called when a stereo model is active (pipeline_calibration.cc).
   const stereo::Rectifier* StereoModelRectifier(const StereoFrame& frame,
@@ -143,20 +152,12 @@ class Pipeline {
   // once, then shared with RequestMapsReset); the first mapper resumes what it holds.
   std::unique_ptr<MapsStore> maps_store_;
   bool maps_resume_tried_ = false;
+  uint64_t maps_saved_stops_ = 0;  // stops merged into the maps when they were last saved
+  std::chrono::steady_clock::time_point maps_saved_at_;
   // A reset asked for and not yet done; taken with each save so that no save of the old maps
   // lands after the store was cleared.
   std::mutex maps_reset_mutex_;
   bool maps_reset_requested_ = false;
-  // Drops the maps in memory if a reset was asked for (pipeline thread, or after it stopped).
-  void ApplyMapsReset();
-  uint64_t maps_saved_stops_ = 0;  // stops merged into the maps when they were last saved
-  std::chrono::steady_clock::time_point maps_saved_at_;
-  void OpenMapsStore();  // at construction
-  // Has the new mapper_ take over the saved maps, once per process.
-  void ResumeSavedMaps();
-  // Hands the maps to the store when a stop joined them since the last save (and, unless
-  // `now_regardless`, save_period_s has passed).
-  void SaveMaps(bool now_regardless);
 
   const ActiveModels* active_models_ = nullptr;
   RawFrameTap* frame_tap_ = nullptr;
