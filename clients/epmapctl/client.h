@@ -38,6 +38,11 @@ struct MapsWait {
   }
 };
 
+// What the maps commands add to their summary line while the service serves maps it resumed
+// after a restart that no key frame has confirmed yet.
+inline constexpr const char* kResumedNote =
+    ", as saved before the service restarted (not yet confirmed by a key frame)";
+
 // Subcommands register a setup function that adds themselves to the app.
 using CommandSetup = std::function<void(CLI::App& app, ClientOptions& options)>;
 std::vector<CommandSetup>& CommandSetups();

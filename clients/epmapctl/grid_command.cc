@@ -98,11 +98,12 @@ int Run(const ClientOptions& options, const Args& args) {
     std::cerr << "epmapctl: " << ex.what() << "\n";
     return 1;
   }
-  std::printf("wrote %s%s%s: %ux%u cells of %.3f m, origin (%.3f, %.3f), %s (stamp %lld ns)%s\n",
+  std::printf("wrote %s%s%s: %ux%u cells of %.3f m, origin (%.3f, %.3f), %s (stamp %lld ns)%s%s\n",
               out.string().c_str(), yaml.empty() ? "" : " and ", yaml.string().c_str(), e.width,
               e.height, e.resolution_m, e.origin_x, e.origin_y, Describe(e).c_str(),
               static_cast<long long>(grid.stamp_ns()),
-              grid.includes_open_stop() ? ", with the stop under way (provisional)" : "");
+              grid.includes_open_stop() ? ", with the stop under way (provisional)" : "",
+              grid.resumed_unconfirmed() ? epmap::ctl::kResumedNote : "");
   return 0;
 }
 

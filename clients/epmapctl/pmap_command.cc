@@ -37,6 +37,7 @@ std::string Json(const epmap::v1::PerceptualMap& m) {
   std::ostringstream s;
   s << "{\"stamp_ns\":" << m.stamp_ns()
     << ",\"includes_open_stop\":" << (m.includes_open_stop() ? "true" : "false")
+    << ",\"resumed_unconfirmed\":" << (m.resumed_unconfirmed() ? "true" : "false")
     << ",\"segments\":[";
   for (int i = 0; i < m.segments_size(); ++i) {
     const auto& g = m.segments(i);
@@ -116,10 +117,11 @@ int Run(const ClientOptions& options, const std::string& out_path,
     std::cerr << "epmapctl: cannot write " << out_path << "\n";
     return 1;
   }
-  std::printf("wrote %s: %d segments, %d views, path of %d points (stamp %lld ns)%s\n",
+  std::printf("wrote %s: %d segments, %d views, path of %d points (stamp %lld ns)%s%s\n",
               out_path.c_str(), map.segments_size(), map.views_size(), map.path_size(),
               static_cast<long long>(map.stamp_ns()),
-              map.includes_open_stop() ? ", with the stop under way (provisional)" : "");
+              map.includes_open_stop() ? ", with the stop under way (provisional)" : "",
+              map.resumed_unconfirmed() ? epmap::ctl::kResumedNote : "");
   return 0;
 }
 

@@ -30,10 +30,10 @@ int Run(const ClientOptions& options, bool json, const epmap::ctl::MapsWait& wai
   if (json) {
     std::printf(
         "{\"stamp_ns\":%lld,\"odometry\":%s,\"corrected\":%s,\"difference\":%s,"
-        "\"keyframes\":%u,\"registrations\":%u}\n",
+        "\"keyframes\":%u,\"registrations\":%u,\"resumed_unconfirmed\":%s}\n",
         static_cast<long long>(pose.stamp_ns()), Pose(pose.odometry()).c_str(),
         Pose(pose.corrected()).c_str(), Pose(pose.difference()).c_str(), pose.keyframes(),
-        pose.registrations());
+        pose.registrations(), pose.resumed_unconfirmed() ? "true" : "false");
     return 0;
   }
   constexpr double kDeg = 180.0 / std::numbers::pi;
@@ -41,8 +41,9 @@ int Run(const ClientOptions& options, bool json, const epmap::ctl::MapsWait& wai
     std::printf("%-10s x %8.3f m  y %8.3f m  theta %8.3f deg\n", name, p.x(), p.y(),
                 p.theta() * kDeg);
   };
-  std::printf("stamp %lld ns, %u key frames, %u registrations\n",
-              static_cast<long long>(pose.stamp_ns()), pose.keyframes(), pose.registrations());
+  std::printf("stamp %lld ns, %u key frames, %u registrations%s\n",
+              static_cast<long long>(pose.stamp_ns()), pose.keyframes(), pose.registrations(),
+              pose.resumed_unconfirmed() ? epmap::ctl::kResumedNote : "");
   line("odometry", pose.odometry());
   line("corrected", pose.corrected());
   line("difference", pose.difference());

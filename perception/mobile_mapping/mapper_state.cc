@@ -133,6 +133,26 @@ bool Near(double a, double b) {
   return std::abs(a - b) <= 1e-9 * std::max(1.0, std::abs(a));
 }
 
+// The header every state starts with: the format, then the camera the maps were made with.
+// Throws std::runtime_error for another format or version.
+stereo::RectifiedGeometry ReadHeader(Reader& r) {
+  r.Expect(std::string_view(kMagic, 8), "saved-maps header");
+  const auto version = r.Get<uint32_t>();
+  if (version != kVersion) {
+    throw std::runtime_error("saved maps of format version " + std::to_string(version) +
+                             ", this is " + std::to_string(kVersion));
+  }
+  stereo::RectifiedGeometry cam;
+  cam.width = r.Get<int32_t>();
+  cam.height = r.Get<int32_t>();
+  cam.fx = r.Get<double>();
+  cam.fy = r.Get<double>();
+  cam.cx = r.Get<double>();
+  cam.cy = r.Get<double>();
+  cam.baseline_m = r.Get<double>();
+  return cam;
+}
+
 }  // namespace
 
 std::string MobileMapper::SaveState() const {
@@ -233,6 +253,17 @@ std::string MobileMapper::SaveState() const {
   return w.Take();
 }
 
+std::optional<stereo::RectifiedGeometry> MobileMapper::SavedCamera(std::string_view bytes,
+                                                                   std::string* reason) {
+  try {
+    Reader r(bytes);
+    return ReadHeader(r);
+  } catch (const std::exception& e) {
+    if (reason) *reason = std::string("the saved maps are not readable: ") + e.what();
+    return std::nullopt;
+  }
+}
+
 bool MobileMapper::RestoreState(std::string_view bytes, std::string* reason) {
   const auto refuse = [&](const std::string& why) {
     if (reason) *reason = why;
@@ -243,20 +274,7 @@ bool MobileMapper::RestoreState(std::string_view bytes, std::string* reason) {
   }
   try {
     Reader r(bytes);
-    r.Expect(std::string_view(kMagic, 8), "saved-maps header");
-    const auto version = r.Get<uint32_t>();
-    if (version != kVersion) {
-      return refuse("saved maps of format version " + std::to_string(version) + ", this is " +
-                    std::to_string(kVersion));
-    }
-    stereo::RectifiedGeometry cam;
-    cam.width = r.Get<int32_t>();
-    cam.height = r.Get<int32_t>();
-    cam.fx = r.Get<double>();
-    cam.fy = r.Get<double>();
-    cam.cx = r.Get<double>();
-    cam.cy = r.Get<double>();
-    cam.baseline_m = r.Get<double>();
+    const stereo::RectifiedGeometry cam = ReadHeader(r);
     if (cam.width != camera_.width || cam.height != camera_.height || !Near(cam.fx, camera_.fx) ||
         !Near(cam.fy, camera_.fy) || !Near(cam.cx, camera_.cx) || !Near(cam.cy, camera_.cy) ||
         !Near(cam.baseline_m, camera_.baseline_m)) {

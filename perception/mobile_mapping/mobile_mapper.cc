@@ -467,6 +467,7 @@ std::shared_ptr<const MapsSnapshot> MobileMapper::Snapshot() const {
   s->grid = grid_;  // deep copy
   s->poses = poses_.records();
   s->counters = counters_;
+  s->resumed_unconfirmed = restore_unconfirmed_;
   return s;
 }
 

@@ -221,6 +221,9 @@ struct MapperCounters {
 struct MapsSnapshot {
   int64_t stamp_ns = 0;
   bool includes_open_stop = false;  // the stop under way is merged provisionally
+  // Restored from saved state (a restart of the service) and not yet confirmed or dropped by
+  // a key frame: the maps as they were saved, in an odometry frame not yet checked to continue.
+  bool resumed_unconfirmed = false;
   perceptual_map::PerceptualMap perceptual;
   occupancy::LayeredGrid grid;
   std::vector<localisation::PoseRecord> poses;  // one per accepted key frame
@@ -269,6 +272,10 @@ class MobileMapper {
   bool RestoreState(std::string_view bytes, std::string* reason);
   // RestoreState took a state and no key frame has confirmed or dropped it yet.
   bool restore_unconfirmed() const { return restore_unconfirmed_; }
+  // The camera saved maps were made with (a mapper for them needs it before any frame), or
+  // nullopt with a reason for bytes that do not start as a state of this format.
+  static std::optional<stereo::RectifiedGeometry> SavedCamera(std::string_view bytes,
+                                                              std::string* reason);
 
   const MapperCounters& counters() const { return counters_; }
   const localisation::PoseCorrector& poses() const { return poses_; }

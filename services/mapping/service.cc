@@ -29,7 +29,8 @@ MappingService::MappingService(const ServiceConfig& config)
   ingest_ = std::make_unique<DdsIngest>(config_, queue_, sensors_, counters_);
   ingest_->SetEyeHandCallback(calibration_->EyeHandSamplesCallback());
   ros_maps_ = std::make_unique<RosMapPublisher>(config_, ingest_->participant(), snapshots_,
-                                                pipeline_->events());
+                                                pipeline_->events(),
+                                                pipeline_->ResumedMapsBeforeFirstFrame());
   ros_perception_ = std::make_unique<RosPerceptionPublisher>(config_, ingest_->participant(),
                                                              snapshots_, pipeline_->events());
 

@@ -35,6 +35,16 @@ grpc::Status MapServiceImpl::LatestMaps(grpc::ServerContext* context, int64_t ne
                                         uint32_t wait_ms,
                                         std::shared_ptr<const mobile_mapping::MapsSnapshot>* maps) {
   if (auto bad = CheckWait(newer_than_ns, wait_ms); !bad.ok()) return bad;
+  // Right after a restart the maps resumed from the state dir are served as saved until the
+  // first frames come (even before odometry makes an `auto` service a mobile base again).
+  if (const auto resumed = service_.pipeline().ResumedMapsBeforeFirstFrame();
+      resumed && resumed->stamp_ns > newer_than_ns) {
+    const auto latest = service_.snapshots().Latest();
+    if (!latest || !latest->maps) {
+      *maps = resumed;
+      return grpc::Status::OK;
+    }
+  }
   const auto not_mobile = [&](const std::string& mode) {
     return grpc::Status{grpc::StatusCode::FAILED_PRECONDITION,
                         "the maps are built in mobile-base mode only; the service is in '" + mode +
@@ -82,6 +92,7 @@ grpc::Status MapServiceImpl::GetPerceptualMap(grpc::ServerContext* context,
   const auto& m = maps->perceptual;
   out->set_stamp_ns(maps->stamp_ns);
   out->set_includes_open_stop(maps->includes_open_stop);
+  out->set_resumed_unconfirmed(maps->resumed_unconfirmed);
   for (const auto& s : m.segments) {
     auto* seg = out->add_segments();
     seg->set_id(s.id);
@@ -155,6 +166,7 @@ grpc::Status MapServiceImpl::GetOccupancyGrid(grpc::ServerContext* context,
   }
   out->set_stamp_ns(maps->stamp_ns);
   out->set_includes_open_stop(maps->includes_open_stop);
+  out->set_resumed_unconfirmed(maps->resumed_unconfirmed);
   out->set_resolution_m(g.resolution_m);
   out->mutable_origin()->set_x(g.origin_x);
   out->mutable_origin()->set_y(g.origin_y);
@@ -178,6 +190,8 @@ grpc::Status MapServiceImpl::ResetMaps(grpc::ServerContext*, const v1::ResetMaps
   }
   if (const auto latest = service_.snapshots().Latest(); latest && latest->maps) {
     out->set_key_frames_dropped(latest->maps->counters.key_frames);
+  } else if (const auto resumed = service_.pipeline().ResumedMapsBeforeFirstFrame()) {
+    out->set_key_frames_dropped(resumed->counters.key_frames);
   }
   try {
     out->set_saved_maps_cleared(service_.pipeline().RequestMapsReset());
@@ -212,6 +226,7 @@ grpc::Status MapServiceImpl::GetPose(grpc::ServerContext* context,
   out->mutable_difference()->set_theta(dtheta);
   out->set_keyframes(static_cast<uint32_t>(maps->counters.key_frames));
   out->set_registrations(static_cast<uint32_t>(maps->counters.registrations));
+  out->set_resumed_unconfirmed(maps->resumed_unconfirmed);
   return grpc::Status::OK;
 }
 

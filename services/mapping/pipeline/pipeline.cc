@@ -57,6 +57,7 @@ Pipeline::Pipeline(const ServiceConfig& config, BoundedQueue<StereoFrame>& queue
   }
   SetUpPoseSource();
   OpenMapsStore();
+  ResumeSavedMaps();
 }
 
 void Pipeline::WarnOnce(const std::string& event, const std::string& message) {

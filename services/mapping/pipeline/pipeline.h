@@ -66,6 +66,10 @@ class Pipeline {
   // frame (or at Stop). Returns whether there were durable maps to clear; throws
   // std::runtime_error when they could not be cleared.
   bool RequestMapsReset();
+  // The maps resumed from the state dir at start-up, while no key frame has been accepted yet
+  // (then the snapshots carry them): a planner asking right after a restart gets the maps as
+  // saved (MapsSnapshot::resumed_unconfirmed), not "no map yet". Null otherwise (any thread).
+  std::shared_ptr<const mobile_mapping::MapsSnapshot> ResumedMapsBeforeFirstFrame() const;
 
  private:
   void Run();
@@ -105,13 +109,16 @@ class Pipeline {
   // snapshot (pipeline_maps.cc).
   void RunMaps(const StereoFrame& frame, const stereo::Rectifier& rectifier, const cv::Mat& left,
                const cv::Mat& right, MapSnapshot& snapshot);
-  // Durable maps (pipeline_maps.cc). OpenMapsStore: at construction. ResumeSavedMaps: the new
-  // mapper_ takes over the saved maps, once per process. SaveMaps: hands the maps to the store
+  // Durable maps (pipeline_maps.cc). OpenMapsStore, then ResumeSavedMaps: at construction,
+  // mapper_ is made for the saved maps' camera and takes them over (served at once, see
+  // ResumedMapsBeforeFirstFrame; ForgetResumedMaps when the snapshots take over or the maps
+  // go). SaveMaps: hands the maps to the store
   // when a stop joined them since the last save (and, unless `now_regardless`, save_period_s
   // has passed). ApplyMapsReset: drops the maps in memory if a reset was asked for (pipeline
   // thread, or after it stopped).
   void OpenMapsStore();
   void ResumeSavedMaps();
+  void ForgetResumedMaps();
   void SaveMaps(bool now_regardless);
   void ApplyMapsReset();
   // The rectifier under the active stereo model, or nullptr (with a counted rejection); only
@@ -143,7 +150,8 @@ class Pipeline {
   std::optional<stereo::Rectifier> rectifier_;
   uint64_t rectifier_version_ = ~0ull;
 
-  // Maps of the mobile base (pipeline_maps.cc): created at the first key frame.
+  // Maps of the mobile base (pipeline_maps.cc): created at the first key frame, or at
+  // construction when saved maps are resumed.
   std::unique_ptr<mobile_mapping::MobileMapper> mapper_;
   std::optional<mobile_mapping::KeyFrameSelector> key_frames_;
   std::vector<mobile_mapping::JointLimit> joint_limits_;  // of the chain's joints, from the URDF
@@ -151,7 +159,8 @@ class Pipeline {
   // Durable maps (maps.persist with state.dir; pipeline_maps.cc): opened at construction (set
   // once, then shared with RequestMapsReset); the first mapper resumes what it holds.
   std::unique_ptr<MapsStore> maps_store_;
-  bool maps_resume_tried_ = false;
+  mutable std::mutex resumed_maps_mutex_;
+  std::shared_ptr<const mobile_mapping::MapsSnapshot> resumed_maps_;
   uint64_t maps_saved_stops_ = 0;  // stops merged into the maps when they were last saved
   std::chrono::steady_clock::time_point maps_saved_at_;
   // A reset asked for and not yet done; taken with each save so that no save of the old maps

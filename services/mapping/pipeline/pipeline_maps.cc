@@ -55,6 +55,7 @@ void Pipeline::OpenMapsStore() {
 bool Pipeline::RequestMapsReset() {
   std::lock_guard lock(maps_reset_mutex_);
   maps_reset_requested_ = true;
+  ForgetResumedMaps();
   if (!maps_store_) return false;
   maps_store_->Clear();
   return true;
@@ -70,36 +71,55 @@ void Pipeline::ApplyMapsReset() {
   key_frames_.reset();
   maps_.reset();
   maps_saved_stops_ = 0;
-  maps_resume_tried_ = true;  // nothing left to resume
   events_.Increment("maps_reset");
   spdlog::info("maps: reset on request; the next key frames start new maps");
 }
 
 void Pipeline::ResumeSavedMaps() {
-  if (maps_resume_tried_) return;
-  maps_resume_tried_ = true;
   if (!maps_store_) return;
   try {
     const auto saved = maps_store_->Load();
     if (!saved) return;
+    // The mapper is made for the camera the maps were saved with; a first frame from another
+    // camera drops them (RunMaps).
     std::string reason;
-    if (mapper_->RestoreState(saved->bytes, &reason)) {
-      events_.Increment("maps_resumed");
-      maps_saved_stops_ = MergedStops(mapper_->counters());
-      spdlog::info(
-          "maps: resuming the saved maps of {} ({} key frames, {} views, {} segments); the first "
-          "key frame decides whether the odometry continues them",
-          maps_store_->path().string(), saved->key_frames, mapper_->counters().views,
-          mapper_->perceptual().Map(false).segments.size());
-    } else {
+    const auto camera = mobile_mapping::MobileMapper::SavedCamera(saved->bytes, &reason);
+    auto mapper = camera ? std::make_unique<mobile_mapping::MobileMapper>(
+                               *camera, MakeMapperParams(config_.maps, joint_limits_))
+                         : nullptr;
+    if (!mapper || !mapper->RestoreState(saved->bytes, &reason)) {
       events_.Increment("maps_saved_not_resumed");
       spdlog::warn("maps: the saved maps in {} are not resumed, new maps start: {}",
                    maps_store_->path().string(), reason);
+      return;
     }
+    mapper_ = std::move(mapper);
+    maps_saved_stops_ = MergedStops(mapper_->counters());
+    maps_ = mapper_->Snapshot();
+    {
+      std::lock_guard lock(resumed_maps_mutex_);
+      resumed_maps_ = maps_;
+    }
+    events_.Increment("maps_resumed");
+    spdlog::info(
+        "maps: resuming the saved maps of {} ({} key frames, {} views, {} segments), served "
+        "from now on; the first key frame decides whether the odometry continues them",
+        maps_store_->path().string(), saved->key_frames, mapper_->counters().views,
+        maps_->perceptual.segments.size());
   } catch (const std::exception& e) {
     events_.Increment("maps_saved_not_resumed");
     spdlog::error("maps: the saved maps cannot be read, new maps start: {}", e.what());
   }
+}
+
+std::shared_ptr<const mobile_mapping::MapsSnapshot> Pipeline::ResumedMapsBeforeFirstFrame() const {
+  std::lock_guard lock(resumed_maps_mutex_);
+  return resumed_maps_;
+}
+
+void Pipeline::ForgetResumedMaps() {
+  std::lock_guard lock(resumed_maps_mutex_);
+  resumed_maps_.reset();
 }
 
 void Pipeline::SaveMaps(bool now_regardless) {
@@ -183,11 +203,22 @@ void Pipeline::RunMaps(const StereoFrame& frame, const stereo::Rectifier& rectif
   if (!mapper_ || !SameGeometry(mapper_->camera(), rectifier.geometry())) {
     // A new rectification (another camera, a new stereo model) makes the old maps' points
     // incomparable with the new ones: the maps restart, counted.
-    if (mapper_) events_.Increment("maps_restarted_new_rectification");
+    if (mapper_ && mapper_->restore_unconfirmed()) {
+      events_.Increment("maps_saved_not_resumed");
+      spdlog::warn(
+          "maps: the saved maps were made with another camera than this one ({}x{}, "
+          "fx {}, baseline {} m); new maps start",
+          rectifier.geometry().width, rectifier.geometry().height, rectifier.geometry().fx,
+          rectifier.geometry().baseline_m);
+    } else if (mapper_) {
+      events_.Increment("maps_restarted_new_rectification");
+    }
+    ForgetResumedMaps();
     mapper_ = std::make_unique<mobile_mapping::MobileMapper>(
         rectifier.geometry(), MakeMapperParams(config_.maps, joint_limits_));
+    maps_.reset();
+    snapshot.maps.reset();
     maps_saved_stops_ = 0;
-    ResumeSavedMaps();  // the first mapper of this process takes over the saved maps
   }
 
   const auto t0 = Clock::now();
@@ -207,6 +238,7 @@ void Pipeline::RunMaps(const StereoFrame& frame, const stereo::Rectifier& rectif
                  r ? r->message : std::string("no reason given"));
     return;
   }
+  ForgetResumedMaps();  // from here on every snapshot carries the maps
   if (report.restored_maps_dropped) {
     events_.Increment("maps_resume_dropped");
     spdlog::warn("maps: the saved maps are not this odometry's, new maps start: {}",

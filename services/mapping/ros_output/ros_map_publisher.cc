@@ -55,11 +55,13 @@ struct RosMapPublisher::Writers {
 };
 
 RosMapPublisher::RosMapPublisher(const ServiceConfig& config, dds::Participant& participant,
-                                 const SnapshotStore& snapshots, CounterSet& events)
+                                 const SnapshotStore& snapshots, CounterSet& events,
+                                 std::shared_ptr<const mobile_mapping::MapsSnapshot> resumed)
     : config_(config),
       participant_(participant),
       snapshots_(snapshots),
       events_(events),
+      resumed_(std::move(resumed)),
       writers_(new Writers) {
   const bool maps_possible =
       config_.maps.enabled && (config_.mode == "auto" || config_.mode == "mobile-base");
@@ -101,6 +103,11 @@ void RosMapPublisher::Run() {
   uint64_t seen_frame = 0;
   std::shared_ptr<const mobile_mapping::MapsSnapshot> published, maps_pending;
   Clock::time_point last_grid{};
+  if (resumed_) {
+    // The snapshots carry these same maps until a key frame changes them: sent once.
+    CreateWriters();
+    published = maps_pending = resumed_;
+  }
   while (!stop_) {
     const auto snapshot = snapshots_.WaitNewer(seen_frame, std::chrono::milliseconds(200));
     if (!snapshot || snapshot->frame_index <= seen_frame) {

@@ -45,9 +45,13 @@ class RosMapPublisher {
   // through participant, counting in events: ros_map_published, ros_tf_published,
   // ros_perceptual_map_published. The writers are created with the
   // first snapshot that carries maps (mobile-base mode); in head or static mode, or with the
-  // maps disabled, nothing is created at all.
+  // maps disabled, nothing is created at all. `resumed`: maps the service resumed from its
+  // state dir at start-up (or null); their grid and perceptual map go out at once, so that a
+  // planner restarted with the robot has its map before the first frame (map -> odom waits for
+  // a key frame: until then the odometry is not known to continue the saved maps).
   RosMapPublisher(const ServiceConfig& config, dds::Participant& participant,
-                  const SnapshotStore& snapshots, CounterSet& events);
+                  const SnapshotStore& snapshots, CounterSet& events,
+                  std::shared_ptr<const mobile_mapping::MapsSnapshot> resumed = nullptr);
   ~RosMapPublisher();  // stops the thread
   RosMapPublisher(const RosMapPublisher&) = delete;
   RosMapPublisher& operator=(const RosMapPublisher&) = delete;
@@ -67,6 +71,7 @@ class RosMapPublisher {
   dds::Participant& participant_;
   const SnapshotStore& snapshots_;
   CounterSet& events_;
+  std::shared_ptr<const mobile_mapping::MapsSnapshot> resumed_;
   std::unique_ptr<Writers> writers_;
   std::atomic<bool> stop_{false};
   std::thread thread_;

@@ -737,15 +737,67 @@ TEST_F(MapsFromPublishedFrames, TheMapsSurviveARestart) {
   ASSERT_GE(before.views_size(), 2);
   ASSERT_GT(before.segments_size(), 0);
 
-  // A clean restart; the robot drives on in the same odometry frame.
+  EXPECT_FALSE(before.resumed_unconfirmed());
+  const auto same_segments = [](const v1::PerceptualMap& a, const v1::PerceptualMap& b) {
+    return a.segments_size() == b.segments_size() &&
+           std::equal(a.segments().begin(), a.segments().end(), b.segments().begin(),
+                      [](const v1::MapSegment& x, const v1::MapSegment& y) {
+                        return x.id() == y.id() && x.x1() == y.x1() && x.y1() == y.y1() &&
+                               x.x2() == y.x2() && x.y2() == y.y2();
+                      });
+  };
+
+  // A clean restart. Before any frame comes, a planner already gets the maps as saved, marked
+  // as not yet confirmed by a key frame.
   ASSERT_NO_FATAL_FAILURE(Restart("epmapd-1.log"));
   EXPECT_TRUE(std::filesystem::exists(work_ / "state" / "maps.sqlite3"));
+  EXPECT_EQ(events("maps_resumed"), 1u);
+  const v1::PerceptualMap at_start = perceptual_map();
+  EXPECT_TRUE(at_start.resumed_unconfirmed());
+  EXPECT_TRUE(same_segments(at_start, before)) << at_start.DebugString();
+  EXPECT_EQ(at_start.stamp_ns(), before.stamp_ns());
+  EXPECT_EQ(pose().keyframes(), pose_before.keyframes());
+  {
+    grpc::ClientContext context;
+    v1::OccupancyGrid grid;
+    ASSERT_TRUE(epmapd_->stub().GetOccupancyGrid(&context, {}, &grid).ok());
+    EXPECT_TRUE(grid.resumed_unconfirmed());
+    EXPECT_GT(grid.width(), 0u);
+    // ROS planners get it too: rt/map (latched) carries the saved grid before any frame.
+    dds::Participant ros_side(domain_, "maps-restart-ros-side");
+    std::mutex map_mutex;
+    std::optional<nav_msgs::msg::OccupancyGrid> latched;
+    dds::Reader<nav_msgs::msg::OccupancyGrid, nav_msgs::msg::OccupancyGridPubSubType> map_reader(
+        ros_side, "rt/map",
+        [&](nav_msgs::msg::OccupancyGrid&& m) {
+          std::lock_guard lock(map_mutex);
+          latched = std::move(m);
+        },
+        16u << 20, 1, dds::Durability::kTransientLocal);
+    bool got = false;
+    for (int attempt = 0; attempt < 300 && !got; ++attempt) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+      std::lock_guard lock(map_mutex);
+      got = latched && dds::ToNanoseconds(latched->header().stamp()) == before.stamp_ns() &&
+            latched->info().width() == grid.width() && latched->info().height() == grid.height();
+    }
+    EXPECT_TRUE(got) << "no saved grid on rt/map after the restart";
+  }
+  const auto [pose_code, pose_out] = testing::RunToCompletion(
+      testing::BinDir() / "epmapctl", {"--server", epmapd_->address(), "pose", "--json"},
+      work_ / "ctl-pose.log", std::chrono::seconds(30));
+  ASSERT_EQ(pose_code, 0) << pose_out;
+  EXPECT_NE(pose_out.find("\"resumed_unconfirmed\":true"), std::string::npos) << pose_out;
+
+  // The robot drives on in the same odometry frame: the first key frame confirms the maps.
   pub_->Frame(stamp(i++), 1.3, 0.0, false);
   WaitForKeyFrames(1);
   EXPECT_EQ(events("maps_resumed"), 1u);
   EXPECT_EQ(events("maps_resume_dropped"), 0u);
   const v1::PerceptualMap resumed = perceptual_map();
   const v1::PoseEstimate pose_resumed = pose();
+  EXPECT_FALSE(resumed.resumed_unconfirmed());
+  EXPECT_FALSE(pose_resumed.resumed_unconfirmed());
   EXPECT_EQ(pose_resumed.keyframes(), pose_before.keyframes() + 1);
   EXPECT_GE(resumed.views_size(), before.views_size());
   // Every segment of before is there, with its id and ends.
@@ -764,12 +816,15 @@ TEST_F(MapsFromPublishedFrames, TheMapsSurviveARestart) {
   // Another restart, and the odometry starts over 5 m away (the base was carried, or restarted
   // its odometry): the saved maps are not this odometry's, and new maps start.
   ASSERT_NO_FATAL_FAILURE(Restart("epmapd-2.log"));
+  EXPECT_TRUE(perceptual_map().resumed_unconfirmed());  // served as saved until a key frame says
   pub_->Frame(stamp(i++), 6.3, 0.0, false);
   WaitForKeyFrames(1);
   EXPECT_EQ(events("maps_resumed"), 1u);
   EXPECT_EQ(events("maps_resume_dropped"), 1u);
   EXPECT_EQ(pose().keyframes(), 1u);
-  EXPECT_EQ(perceptual_map().segments_size(), 0);
+  const v1::PerceptualMap fresh = perceptual_map();
+  EXPECT_EQ(fresh.segments_size(), 0);
+  EXPECT_FALSE(fresh.resumed_unconfirmed());
   const std::string log = ReadText(work_ / "epmapd.log");
   EXPECT_NE(log.find("not this odometry's"), std::string::npos) << log;
 
@@ -786,6 +841,12 @@ TEST_F(MapsFromPublishedFrames, TheMapsSurviveARestart) {
   EXPECT_EQ(events("maps_reset"), 1u);
   EXPECT_EQ(pose().keyframes(), 1u);
   ASSERT_NO_FATAL_FAILURE(Restart("epmapd-3.log"));
+  {
+    grpc::ClientContext context;
+    v1::PerceptualMap none;
+    EXPECT_EQ(epmapd_->stub().GetPerceptualMap(&context, {}, &none).error_code(),
+              grpc::StatusCode::FAILED_PRECONDITION);
+  }
   pub_->Frame(stamp(i++), 6.9, 0.0, false);
   WaitForKeyFrames(1);
   EXPECT_EQ(events("maps_resumed"), 0u);

@@ -427,10 +427,21 @@ TEST_F(MobileMapperTest, SavedMapsResumeExactlyWhereTheyStopped) {
   const std::string saved = running.SaveState();
   ASSERT_GT(running.counters().views, 0u);
 
-  MobileMapper resumed(testing::BumblebeeLikeCamera(), Params());
+  // A service makes the mapper from the camera the state names, before any frame.
   std::string reason;
+  const auto saved_camera = MobileMapper::SavedCamera(saved, &reason);
+  ASSERT_TRUE(saved_camera.has_value()) << reason;
+  const auto camera = testing::BumblebeeLikeCamera();
+  EXPECT_EQ(saved_camera->width, camera.width);
+  EXPECT_EQ(saved_camera->height, camera.height);
+  EXPECT_EQ(saved_camera->fx, camera.fx);
+  EXPECT_EQ(saved_camera->cy, camera.cy);
+  EXPECT_EQ(saved_camera->baseline_m, camera.baseline_m);
+  MobileMapper resumed(*saved_camera, Params());
   ASSERT_TRUE(resumed.RestoreState(saved, &reason)) << reason;
   EXPECT_TRUE(resumed.restore_unconfirmed());
+  EXPECT_TRUE(resumed.Snapshot()->resumed_unconfirmed);
+  EXPECT_FALSE(running.Snapshot()->resumed_unconfirmed);
   EXPECT_EQ(resumed.SaveState(), saved);  // byte for byte
 
   for (size_t i = k; i < frames_->size(); ++i) {
@@ -440,6 +451,7 @@ TEST_F(MobileMapperTest, SavedMapsResumeExactlyWhereTheyStopped) {
     EXPECT_FALSE(b.restored_maps_dropped.has_value());
   }
   EXPECT_FALSE(resumed.restore_unconfirmed());
+  EXPECT_FALSE(resumed.Snapshot()->resumed_unconfirmed);
   running.Flush();
   resumed.Flush();
   EXPECT_EQ(resumed.SaveState(), running.SaveState());
@@ -480,6 +492,14 @@ TEST_F(MobileMapperTest, BrokenOrForeignSavedMapsAreRefused) {
   std::string version = saved;
   version[8] = 7;
   refused(version, cam, Params(), "format version 7");
+  // Nor is a camera read from them.
+  for (const std::string_view bad :
+       {std::string_view("not saved maps at all"), std::string_view(version),
+        std::string_view(saved).substr(0, 20)}) {
+    std::string reason;
+    EXPECT_FALSE(MobileMapper::SavedCamera(bad, &reason).has_value());
+    EXPECT_NE(reason.find("not readable"), std::string::npos) << reason;
+  }
   auto other_cam = cam;
   other_cam.fx *= 1.01;
   refused(saved, other_cam, Params(), "another camera");
