@@ -61,6 +61,31 @@ std::pair<int, std::string> Ctl(const testing::Epmapd& epmapd, const std::filesy
                                   std::chrono::seconds(30));
 }
 
+// The grid on rt/map as a ROS planner that joins now gets it (latched: transient local), once
+// one with `stamp_ns` has come; nullopt after `timeout`.
+std::optional<nav_msgs::msg::OccupancyGrid> LatchedGridWithStamp(uint32_t domain, int64_t stamp_ns,
+                                                                 std::chrono::seconds timeout) {
+  dds::Participant ros_side(domain, "maps-e2e-map-reader");
+  std::mutex map_mutex;
+  std::optional<nav_msgs::msg::OccupancyGrid> latched;
+  dds::Reader<nav_msgs::msg::OccupancyGrid, nav_msgs::msg::OccupancyGridPubSubType> map_reader(
+      ros_side, "rt/map",
+      [&](nav_msgs::msg::OccupancyGrid&& m) {
+        std::lock_guard lock(map_mutex);
+        latched = std::move(m);
+      },
+      16u << 20, 1, dds::Durability::kTransientLocal);
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  while (std::chrono::steady_clock::now() < deadline) {
+    {
+      std::lock_guard lock(map_mutex);
+      if (latched && dds::ToNanoseconds(latched->header().stamp()) == stamp_ns) return latched;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  return std::nullopt;
+}
+
 TEST(MapsE2E, BuildingRunGivesMapsNearTheTrueWalls) {
   const auto work = testing::FreshTempDir("maps-e2e");
   const uint32_t domain = testing::UniqueDomainId(61);
@@ -260,26 +285,7 @@ TEST(MapsE2E, BuildingRunGivesMapsNearTheTrueWalls) {
     grpc::ClientContext context;
     v1::OccupancyGrid served;
     ASSERT_TRUE(epmapd.stub().GetOccupancyGrid(&context, {}, &served).ok());
-    std::mutex map_mutex;
-    std::optional<nav_msgs::msg::OccupancyGrid> latched;
-    dds::Reader<nav_msgs::msg::OccupancyGrid, nav_msgs::msg::OccupancyGridPubSubType> map_reader(
-        ros_side, "rt/map",
-        [&](nav_msgs::msg::OccupancyGrid&& m) {
-          std::lock_guard lock(map_mutex);
-          latched = std::move(m);
-        },
-        16u << 20, 1, dds::Durability::kTransientLocal);
-    const int64_t want_stamp = served.stamp_ns();
-    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(15);
-    std::optional<nav_msgs::msg::OccupancyGrid> grid;
-    while (std::chrono::steady_clock::now() < deadline) {
-      {
-        std::lock_guard lock(map_mutex);
-        if (latched && dds::ToNanoseconds(latched->header().stamp()) == want_stamp) grid = latched;
-      }
-      if (grid) break;
-      std::this_thread::sleep_for(std::chrono::milliseconds(50));
-    }
+    const auto grid = LatchedGridWithStamp(domain, served.stamp_ns(), std::chrono::seconds(15));
     ASSERT_TRUE(grid.has_value()) << "no grid with the served stamp on rt/map";
     EXPECT_EQ(grid->header().frame_id(), "map");
     EXPECT_EQ(grid->info().width(), served.width());
@@ -764,24 +770,10 @@ TEST_F(MapsFromPublishedFrames, TheMapsSurviveARestart) {
     EXPECT_TRUE(grid.resumed_unconfirmed());
     EXPECT_GT(grid.width(), 0u);
     // ROS planners get it too: rt/map (latched) carries the saved grid before any frame.
-    dds::Participant ros_side(domain_, "maps-restart-ros-side");
-    std::mutex map_mutex;
-    std::optional<nav_msgs::msg::OccupancyGrid> latched;
-    dds::Reader<nav_msgs::msg::OccupancyGrid, nav_msgs::msg::OccupancyGridPubSubType> map_reader(
-        ros_side, "rt/map",
-        [&](nav_msgs::msg::OccupancyGrid&& m) {
-          std::lock_guard lock(map_mutex);
-          latched = std::move(m);
-        },
-        16u << 20, 1, dds::Durability::kTransientLocal);
-    bool got = false;
-    for (int attempt = 0; attempt < 300 && !got; ++attempt) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(50));
-      std::lock_guard lock(map_mutex);
-      got = latched && dds::ToNanoseconds(latched->header().stamp()) == before.stamp_ns() &&
-            latched->info().width() == grid.width() && latched->info().height() == grid.height();
-    }
-    EXPECT_TRUE(got) << "no saved grid on rt/map after the restart";
+    const auto latched = LatchedGridWithStamp(domain_, before.stamp_ns(), std::chrono::seconds(15));
+    ASSERT_TRUE(latched.has_value()) << "no saved grid on rt/map after the restart";
+    EXPECT_EQ(latched->info().width(), grid.width());
+    EXPECT_EQ(latched->info().height(), grid.height());
   }
   const auto [pose_code, pose_out] = testing::RunToCompletion(
       testing::BinDir() / "epmapctl", {"--server", epmapd_->address(), "pose", "--json"},
