@@ -424,6 +424,9 @@ class MobileBasePublisher {
     return ok;
   }
 
+  // Another camera from the next frame on (its CameraInfo's focal length).
+  void SetFocalLength(double px) { focal_px_ = px; }
+
   // The frames rt/odom names: by default those epmapd expects (maps.odom_frame, the URDF root).
   void SetOdometryFrames(std::string frame_id, std::string child_frame_id) {
     odom_frame_ = std::move(frame_id);
@@ -475,12 +478,14 @@ class MobileBasePublisher {
  private:
   static constexpr int kWidth = 160, kHeight = 120;
   static constexpr double kBaseline = 0.1;
-  static dds::CameraCalibration Camera(double baseline) {
-    return camera::Pinhole({kWidth, kHeight, 100, 100, kWidth / 2.0, kHeight / 2.0}, baseline);
+  dds::CameraCalibration Camera(double baseline) const {
+    return camera::Pinhole({kWidth, kHeight, focal_px_, focal_px_, kWidth / 2.0, kHeight / 2.0},
+                           baseline);
   }
   static void Pace() { std::this_thread::sleep_for(std::chrono::milliseconds(20)); }
 
   std::string odom_frame_ = "odom", odom_child_ = "base_link";
+  double focal_px_ = 100;
 
   dds::Participant participant_;
   dds::Writer<sensor_msgs::msg::Image, sensor_msgs::msg::ImagePubSubType> left_, right_;
@@ -879,6 +884,57 @@ TEST_F(MapsFromPublishedFrames, TheMapsSurviveACrashAsLastSaved) {
   ASSERT_TRUE(epmapd_->stub().GetPose(&context, {}, &pose).ok());
   // Saved when stop 1 joined (at key frame 5) or stop 2 (key frame 8), plus the one now.
   EXPECT_TRUE(pose.keyframes() == 6u || pose.keyframes() == 9u) << pose.DebugString();
+}
+
+// Saved maps belong to the camera they were made with: a restarted epmapd whose first frame
+// comes from another camera starts new maps; and a reset before any frame stops serving the
+// saved ones at once.
+TEST_F(MapsFromPublishedFrames, SavedMapsOfAnotherCameraAreNotResumed) {
+  ASSERT_NO_FATAL_FAILURE(Start("maps-other-camera", 68, {}, /*durable=*/true));
+  const auto stamp = &Stamp;
+  const auto events = [this](const char* name) {
+    v1::ServiceStatus status;
+    EXPECT_TRUE(epmapd_->Status(&status).ok());
+    return testing::Epmapd::Count(status.events(), name);
+  };
+  const auto map_status = [this](v1::PerceptualMap* map) {
+    grpc::ClientContext context;
+    return epmapd_->stub().GetPerceptualMap(&context, {}, map);
+  };
+  int i = 0;
+  for (const double pan : {0.0, 0.3, 0.6}) pub_->Frame(stamp(i++), 0.0, pan, false);
+  pub_->Frame(stamp(i++), 0.5, 0.0, false);
+  WaitForKeyFrames(4);
+  v1::PerceptualMap saved;
+  ASSERT_TRUE(map_status(&saved).ok());
+
+  ASSERT_NO_FATAL_FAILURE(Restart("epmapd-1.log"));
+  v1::PerceptualMap map;
+  ASSERT_TRUE(map_status(&map).ok());
+  EXPECT_TRUE(map.resumed_unconfirmed());
+  EXPECT_EQ(map.segments_size(), saved.segments_size());
+  pub_->SetFocalLength(110);  // the odometry continues, but the camera is not the same
+  pub_->Frame(stamp(i++), 0.8, 0.0, false);
+  WaitForKeyFrames(1);
+  EXPECT_EQ(events("maps_resumed"), 1u);
+  EXPECT_EQ(events("maps_saved_not_resumed"), 1u);
+  EXPECT_EQ(events("maps_restarted_new_rectification"), 0u);
+  ASSERT_TRUE(map_status(&map).ok());
+  EXPECT_FALSE(map.resumed_unconfirmed());
+  EXPECT_EQ(map.segments_size(), 0);
+  EXPECT_NE(ReadText(work_ / "epmapd.log").find("made with another camera"), std::string::npos);
+
+  // The new maps made no stop, so the store still holds the first ones: a restart serves them
+  // again, until a reset, which stops serving them at once, before any frame.
+  ASSERT_NO_FATAL_FAILURE(Restart("epmapd-2.log"));
+  ASSERT_TRUE(map_status(&map).ok());
+  EXPECT_TRUE(map.resumed_unconfirmed());
+  grpc::ClientContext context;
+  v1::ResetMapsResponse reset;
+  ASSERT_TRUE(epmapd_->stub().ResetMaps(&context, {}, &reset).ok());
+  EXPECT_TRUE(reset.saved_maps_cleared());
+  EXPECT_EQ(reset.key_frames_dropped(), 4u);
+  EXPECT_EQ(map_status(&map).error_code(), grpc::StatusCode::FAILED_PRECONDITION);
 }
 
 // A planner that has the maps waits for the next ones instead of polling: the call returns when
