@@ -2,13 +2,13 @@
 
 #include <fcntl.h>
 #include <google/protobuf/util/json_util.h>
-#include <sqlite3.h>
 #include <sys/file.h>
 #include <unistd.h>
 
 #include <set>
 #include <utility>
 
+#include "common/sqlite/sqlite_database.h"
 #include "services/mapping/api/proto_conversions.h"
 
 namespace epmap::mapping {
@@ -65,88 +65,8 @@ CREATE TABLE IF NOT EXISTS activation_history (
 PRAGMA user_version = 1;
 )sql";
 
-// One prepared statement, finalised on scope exit.
-class Statement {
- public:
-  Statement(sqlite3* db, const char* sql) : db_(db) {
-    if (sqlite3_prepare_v2(db, sql, -1, &stmt_, nullptr) != SQLITE_OK) {
-      throw StoreError(Code::kInternal,
-                       std::string("state database: cannot prepare: ") + sqlite3_errmsg(db));
-    }
-  }
-  ~Statement() { sqlite3_finalize(stmt_); }
-  Statement(const Statement&) = delete;
-  Statement& operator=(const Statement&) = delete;
-
-  Statement& Bind(int i, int64_t v) {
-    Check(sqlite3_bind_int64(stmt_, i, v));
-    return *this;
-  }
-  Statement& Bind(int i, double v) {
-    Check(sqlite3_bind_double(stmt_, i, v));
-    return *this;
-  }
-  Statement& Bind(int i, const std::string& v) {
-    Check(sqlite3_bind_text(stmt_, i, v.data(), static_cast<int>(v.size()), SQLITE_TRANSIENT));
-    return *this;
-  }
-  // True while a row is available.
-  bool Step() {
-    const int rc = sqlite3_step(stmt_);
-    if (rc == SQLITE_ROW) return true;
-    if (rc == SQLITE_DONE) return false;
-    throw StoreError(Code::kInternal, std::string("state database: ") + sqlite3_errmsg(db_));
-  }
-  void Run() {
-    while (Step()) {
-    }
-  }
-  void Reset() {
-    sqlite3_reset(stmt_);
-    sqlite3_clear_bindings(stmt_);
-  }
-  int64_t Int(int col) const { return sqlite3_column_int64(stmt_, col); }
-  double Real(int col) const { return sqlite3_column_double(stmt_, col); }
-  std::string Text(int col) const {
-    const auto* p = sqlite3_column_text(stmt_, col);
-    return p ? std::string(reinterpret_cast<const char*>(p)) : std::string();
-  }
-
- private:
-  void Check(int rc) {
-    if (rc != SQLITE_OK) {
-      throw StoreError(Code::kInternal,
-                       std::string("state database: bind: ") + sqlite3_errmsg(db_));
-    }
-  }
-  sqlite3* db_;
-  sqlite3_stmt* stmt_ = nullptr;
-};
-
-// BEGIN IMMEDIATE ... COMMIT; rolled back if the scope is left by an exception.
-class Transaction {
- public:
-  explicit Transaction(sqlite3* db) : db_(db) { Exec("BEGIN IMMEDIATE"); }
-  ~Transaction() {
-    if (!done_) sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
-  }
-  void Commit() {
-    Exec("COMMIT");
-    done_ = true;
-  }
-
- private:
-  void Exec(const char* sql) {
-    char* error = nullptr;
-    if (sqlite3_exec(db_, sql, nullptr, nullptr, &error) != SQLITE_OK) {
-      const std::string message = error ? error : "unknown error";
-      sqlite3_free(error);
-      throw StoreError(Code::kInternal, std::string("state database: ") + sql + ": " + message);
-    }
-  }
-  sqlite3* db_;
-  bool done_ = false;
-};
+using sqlite::Statement;
+using sqlite::Transaction;
 
 std::string ToJson(const google::protobuf::Message& m) {
   std::string out;
@@ -205,7 +125,7 @@ v1::Model ReadModel(const Statement& s) {
 
 }  // namespace
 
-CalibrationStore::CalibrationStore(const std::filesystem::path& dir) : path_(dir / kFileName) {
+CalibrationStore::FolderLock::FolderLock(const std::filesystem::path& dir) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   if (ec) {
@@ -214,47 +134,27 @@ CalibrationStore::CalibrationStore(const std::filesystem::path& dir) : path_(dir
   }
   // One process per state folder: two writers would interleave job ids and activations.
   const auto lock_path = dir / "calibration.lock";
-  lock_fd_ = ::open(lock_path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
-  if (lock_fd_ < 0 || ::flock(lock_fd_, LOCK_EX | LOCK_NB) != 0) {
-    if (lock_fd_ >= 0) ::close(lock_fd_);
-    lock_fd_ = -1;
+  fd = ::open(lock_path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (fd < 0 || ::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+    if (fd >= 0) ::close(fd);
     throw StoreError(Code::kInternal, "the state folder " + dir.string() +
                                           " is in use by another epmapd (or not writable)");
   }
-  if (sqlite3_open_v2(path_.c_str(), &db_, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE, nullptr) !=
-      SQLITE_OK) {
-    const std::string reason = db_ ? sqlite3_errmsg(db_) : "out of memory";
-    sqlite3_close(db_);
-    db_ = nullptr;
-    ::close(lock_fd_);
-    throw StoreError(Code::kInternal, "cannot open " + path_.string() + ": " + reason);
-  }
-  try {
-    Exec("PRAGMA journal_mode = WAL");
-    Exec("PRAGMA synchronous = FULL");
-    Exec("PRAGMA foreign_keys = ON");
-    Exec("PRAGMA busy_timeout = 5000");
-    Exec(kSchema);
-  } catch (...) {
-    sqlite3_close(db_);
-    ::close(lock_fd_);
-    throw;
-  }
 }
 
-CalibrationStore::~CalibrationStore() {
-  sqlite3_close(db_);
-  if (lock_fd_ >= 0) ::close(lock_fd_);
+CalibrationStore::FolderLock::~FolderLock() {
+  ::close(fd);
 }
 
-void CalibrationStore::Exec(const char* sql) const {
-  char* error = nullptr;
-  if (sqlite3_exec(db_, sql, nullptr, nullptr, &error) != SQLITE_OK) {
-    const std::string message = error ? error : "unknown error";
-    sqlite3_free(error);
-    throw StoreError(Code::kInternal, "state database " + path_.string() + ": " + message);
-  }
+CalibrationStore::CalibrationStore(const std::filesystem::path& dir)
+    : folder_lock_(dir), db_(dir / kFileName, /*busy_timeout_ms=*/5000) {
+  db_.Exec("PRAGMA journal_mode = WAL");
+  db_.Exec("PRAGMA synchronous = FULL");
+  db_.Exec("PRAGMA foreign_keys = ON");
+  db_.Exec(kSchema);
 }
+
+CalibrationStore::~CalibrationStore() = default;
 
 // ----------------------------------------------------------------------------------- samples
 
@@ -314,7 +214,7 @@ uint64_t CalibrationStore::DeleteSamples(const std::string& set) {
   Transaction tx(db_);
   Statement del(db_, "DELETE FROM samples WHERE set_name = ?");
   del.Bind(1, set).Run();
-  const auto n = static_cast<uint64_t>(sqlite3_changes(db_));
+  const auto n = static_cast<uint64_t>(db_.changes());
   tx.Commit();
   return n;
 }
@@ -375,7 +275,7 @@ void CalibrationStore::WriteJobLocked(const v1::Job& job) {
       .Bind(10, ToJson(job.errors()))
       .Bind(11, job.id())
       .Run();
-  if (sqlite3_changes(db_) == 0) throw StoreError(Code::kNotFound, "no job " + job.id());
+  if (db_.changes() == 0) throw StoreError(Code::kNotFound, "no job " + job.id());
 }
 
 std::optional<v1::Job> CalibrationStore::GetJob(const std::string& id) const {
@@ -410,7 +310,7 @@ int CalibrationStore::InterruptUnfinishedJobs(int64_t now_ns) {
       .Bind(4, static_cast<int64_t>(v1::QUEUED))
       .Bind(5, static_cast<int64_t>(v1::RUNNING))
       .Run();
-  return sqlite3_changes(db_);
+  return db_.changes();
 }
 
 // ------------------------------------------------------------------------------------ models

@@ -20,9 +20,8 @@
 #include <string>
 #include <vector>
 
+#include "common/sqlite/sqlite_database.h"
 #include "perception/calibration/eye_hand_samples.h"
-
-struct sqlite3;
 
 namespace epmap::mapping {
 
@@ -42,13 +41,15 @@ class CalibrationStore {
   static constexpr const char* kFileName = "calibration.sqlite3";
 
   // Opens (creating) <dir>/calibration.sqlite3. Throws StoreError(kInternal) with the reason if
-  // the folder cannot be created, the database cannot be opened, or another process holds it.
+  // the folder cannot be created or another process holds it, sqlite::Error if the database
+  // cannot be opened. Any call below throws sqlite::Error (a std::runtime_error naming the file)
+  // when the database itself fails; StoreError is for what the data says.
   explicit CalibrationStore(const std::filesystem::path& dir);
   ~CalibrationStore();
   CalibrationStore(const CalibrationStore&) = delete;
   CalibrationStore& operator=(const CalibrationStore&) = delete;
 
-  const std::filesystem::path& path() const { return path_; }
+  const std::filesystem::path& path() const { return db_.path(); }
 
   // --- samples ---
   struct AddResult {
@@ -99,14 +100,22 @@ class CalibrationStore {
   std::optional<v1::Model> Rollback(v1::JobKind kind, int64_t now_ns);
 
  private:
-  void Exec(const char* sql) const;
   std::optional<std::string> ActiveModelId(v1::JobKind kind) const;  // caller holds mutex_
   void ActivateLocked(const std::string& id, v1::JobKind kind, int64_t now_ns);
   void WriteJobLocked(const v1::Job& job);
 
-  std::filesystem::path path_;
-  int lock_fd_ = -1;
-  sqlite3* db_ = nullptr;
+  // An advisory lock on <dir>/calibration.lock (creating the folder), held while the store
+  // lives; the kernel releases it when the process dies.
+  struct FolderLock {
+    explicit FolderLock(const std::filesystem::path& dir);
+    ~FolderLock();
+    FolderLock(const FolderLock&) = delete;
+    FolderLock& operator=(const FolderLock&) = delete;
+    int fd = -1;
+  };
+
+  FolderLock folder_lock_;
+  sqlite::Database db_;
   mutable std::mutex mutex_;
 };
 

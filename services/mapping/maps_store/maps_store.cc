@@ -21,46 +21,21 @@ CREATE TABLE IF NOT EXISTS maps (
 PRAGMA user_version = 1;
 )sql";
 
-std::string Error(sqlite3* db, const std::string& what) {
-  return "maps store: " + what + ": " + (db ? sqlite3_errmsg(db) : "out of memory");
-}
-
-// A prepared statement, finalised on scope exit.
-struct Statement {
-  Statement(sqlite3* db, const char* sql) {
-    if (sqlite3_prepare_v2(db, sql, -1, &stmt, nullptr) != SQLITE_OK) {
-      throw std::runtime_error(Error(db, "cannot prepare"));
-    }
+// The folder first: SQLite does not make it.
+std::filesystem::path InFolder(const std::filesystem::path& dir) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) {
+    throw std::runtime_error("maps store: cannot create " + dir.string() + ": " + ec.message());
   }
-  ~Statement() { sqlite3_finalize(stmt); }
-  Statement(const Statement&) = delete;
-  Statement& operator=(const Statement&) = delete;
-  sqlite3_stmt* stmt = nullptr;
-};
+  return dir / MapsStore::kFileName;
+}
 
 }  // namespace
 
 MapsStore::MapsStore(const std::filesystem::path& dir, CounterSet& events)
-    : path_(dir / kFileName), events_(events) {
-  std::error_code ec;
-  std::filesystem::create_directories(dir, ec);
-  if (ec)
-    throw std::runtime_error("maps store: cannot create " + dir.string() + ": " + ec.message());
-  if (sqlite3_open_v2(path_.c_str(), &db_, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE, nullptr) !=
-      SQLITE_OK) {
-    const std::string message = Error(db_, "cannot open " + path_.string());
-    sqlite3_close(db_);
-    throw std::runtime_error(message);
-  }
-  sqlite3_busy_timeout(db_, 2000);
-  char* error = nullptr;
-  if (sqlite3_exec(db_, kSchema, nullptr, nullptr, &error) != SQLITE_OK) {
-    const std::string message =
-        "maps store: " + path_.string() + ": " + (error ? error : "unknown error");
-    sqlite3_free(error);
-    sqlite3_close(db_);
-    throw std::runtime_error(message);
-  }
+    : events_(events), db_(InFolder(dir)) {
+  db_.Exec(kSchema);
   thread_ = std::thread([this] { Run(); });
 }
 
@@ -71,20 +46,16 @@ MapsStore::~MapsStore() {
   }
   changed_.notify_all();
   if (thread_.joinable()) thread_.join();
-  sqlite3_close(db_);
 }
 
 std::optional<MapsStore::Saved> MapsStore::Load() const {
   std::lock_guard lock(db_mutex_);
-  Statement s(db_, "SELECT state, saved_unix_ns, key_frames FROM maps WHERE slot = 0");
-  const int rc = sqlite3_step(s.stmt);
-  if (rc == SQLITE_DONE) return std::nullopt;
-  if (rc != SQLITE_ROW) throw std::runtime_error(Error(db_, "cannot read the saved maps"));
+  sqlite::Statement s(db_, "SELECT state, saved_unix_ns, key_frames FROM maps WHERE slot = 0");
+  if (!s.Step()) return std::nullopt;
   Saved saved;
-  const auto* blob = static_cast<const char*>(sqlite3_column_blob(s.stmt, 0));
-  saved.bytes.assign(blob ? blob : "", static_cast<size_t>(sqlite3_column_bytes(s.stmt, 0)));
-  saved.saved_unix_ns = sqlite3_column_int64(s.stmt, 1);
-  saved.key_frames = static_cast<uint64_t>(sqlite3_column_int64(s.stmt, 2));
+  saved.bytes = s.Blob(0);
+  saved.saved_unix_ns = s.Int(1);
+  saved.key_frames = static_cast<uint64_t>(s.Int(2));
   return saved;
 }
 
@@ -108,9 +79,7 @@ void MapsStore::Clear() {
     changed_.wait(lock, [&] { return !writing_ || stop_; });
   }
   std::lock_guard lock(db_mutex_);
-  if (sqlite3_exec(db_, "DELETE FROM maps", nullptr, nullptr, nullptr) != SQLITE_OK) {
-    throw std::runtime_error(Error(db_, "cannot clear the saved maps"));
-  }
+  db_.Exec("DELETE FROM maps");
 }
 
 void MapsStore::Run() {
@@ -132,23 +101,21 @@ void MapsStore::Run() {
 void MapsStore::Write(const std::string& bytes, uint64_t key_frames) {
   try {
     std::lock_guard lock(db_mutex_);
-    Statement s(db_,
-                "INSERT OR REPLACE INTO maps (slot, saved_unix_ns, key_frames, state) "
-                "VALUES (0, ?1, ?2, ?3)");
     const int64_t now = std::chrono::duration_cast<std::chrono::nanoseconds>(
                             std::chrono::system_clock::now().time_since_epoch())
                             .count();
-    if (sqlite3_bind_int64(s.stmt, 1, now) != SQLITE_OK ||
-        sqlite3_bind_int64(s.stmt, 2, static_cast<int64_t>(key_frames)) != SQLITE_OK ||
-        sqlite3_bind_blob64(s.stmt, 3, bytes.data(), bytes.size(), SQLITE_STATIC) != SQLITE_OK ||
-        sqlite3_step(s.stmt) != SQLITE_DONE) {
-      throw std::runtime_error(Error(db_, "cannot save the maps"));
-    }
+    sqlite::Statement(db_,
+                      "INSERT OR REPLACE INTO maps (slot, saved_unix_ns, key_frames, state) "
+                      "VALUES (0, ?1, ?2, ?3)")
+        .Bind(1, now)
+        .Bind(2, static_cast<int64_t>(key_frames))
+        .BindBlob(3, bytes)
+        .Run();
     events_.Increment("maps_saved");
   } catch (const std::exception& e) {
     // The maps in memory are intact; the next save tries again.
     events_.Increment("maps_save_failed");
-    spdlog::warn("{}", e.what());
+    spdlog::warn("maps: cannot save the maps: {}", e.what());
   }
 }
 

@@ -5,8 +5,6 @@
 // WAL journal, synchronous=FULL: a save that returned is on disk; a crash mid-save leaves the
 // previous one. Saving runs on the store's own thread; the pipeline only hands bytes over.
 
-#include <sqlite3.h>
-
 #include <condition_variable>
 #include <cstdint>
 #include <filesystem>
@@ -15,6 +13,7 @@
 #include <string>
 #include <thread>
 
+#include "common/sqlite/sqlite_database.h"
 #include "services/mapping/ingest/counters.h"
 
 namespace epmap::mapping {
@@ -23,9 +22,9 @@ class MapsStore {
  public:
   static constexpr const char* kFileName = "maps.sqlite3";
 
-  // Opens (creating) <dir>/maps.sqlite3. Throws std::runtime_error with the reason when the
-  // folder or the database cannot be made. Saves are counted in events as maps_saved and
-  // maps_save_failed (the reason logged).
+  // Opens (creating) <dir>/maps.sqlite3. Throws std::runtime_error (sqlite::Error for the
+  // database) with the reason when the folder or the database cannot be made. Saves are counted in
+  // events as maps_saved and maps_save_failed (the reason logged).
   MapsStore(const std::filesystem::path& dir, CounterSet& events);
   ~MapsStore();  // writes what is pending, then closes
   MapsStore(const MapsStore&) = delete;
@@ -47,15 +46,14 @@ class MapsStore {
   // is waited for, then the row is deleted. Throws std::runtime_error when it cannot delete.
   void Clear();
 
-  const std::filesystem::path& path() const { return path_; }
+  const std::filesystem::path& path() const { return db_.path(); }
 
  private:
   void Run();
   void Write(const std::string& bytes, uint64_t key_frames);
 
-  std::filesystem::path path_;
   CounterSet& events_;
-  sqlite3* db_ = nullptr;
+  sqlite::Database db_;
   mutable std::mutex db_mutex_;
 
   std::mutex mutex_;

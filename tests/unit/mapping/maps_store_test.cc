@@ -67,5 +67,20 @@ TEST(MapsStore, AFolderThatCannotBeMadeIsAClearError) {
   }
 }
 
+// A maps.sqlite3 that is not a database (another program's file, a broken disk) is refused
+// with its name and the reason; epmapd then maps in memory (maps_store_unavailable).
+TEST(MapsStore, AFileThatIsNotADatabaseIsAClearError) {
+  const auto dir = testing::FreshTempDir("maps-store-junk");
+  std::ofstream(dir / MapsStore::kFileName) << std::string(5000, '?');
+  CounterSet events;
+  try {
+    MapsStore store(dir, events);
+    FAIL() << "a file that is not a database must be refused";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("maps.sqlite3"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("not a database"), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace epmap::mapping
