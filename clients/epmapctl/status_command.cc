@@ -2,6 +2,7 @@
 
 #include <google/protobuf/util/json_util.h>
 
+#include <chrono>
 #include <cstdio>
 #include <iostream>
 #include <string>
@@ -58,6 +59,20 @@ void PrintHuman(const epmap::v1::ServiceStatus& s) {
                 joints.c_str(), r.pose_source().c_str());
   } else {
     std::printf("robot: no URDF (robot.urdf, --urdf or --urdf-topic)\n");
+  }
+  if (s.has_saved_maps()) {
+    const auto& m = s.saved_maps();
+    if (m.saved()) {
+      const double age_s = (std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                std::chrono::system_clock::now().time_since_epoch())
+                                .count() -
+                            m.saved_unix_ns()) *
+                           1e-9;
+      std::printf("saved maps: %s, %llu key frames, %.1f MB, saved %.0f s ago\n", m.path().c_str(),
+                  static_cast<unsigned long long>(m.key_frames()), m.bytes() / 1e6, age_s);
+    } else {
+      std::printf("saved maps: %s, none saved yet (or reset)\n", m.path().c_str());
+    }
   }
   PrintCounters("rejected", s.rejected_by_reason());
   PrintCounters("key frames the maps refused (their frames were processed)",

@@ -83,6 +83,16 @@ grpc::Status MapServiceImpl::GetStatus(grpc::ServerContext*, const v1::GetStatus
     for (const auto& joint : chain->joint_names()) robot->add_joints(joint);
     robot->set_pose_source(pipeline.EffectivePoseSource());
   }
+  if (const MapsStore* store = pipeline.maps_store()) {
+    auto* saved = out->mutable_saved_maps();
+    saved->set_path(store->path().string());
+    if (const auto on_disk = store->OnDisk()) {
+      saved->set_saved(true);
+      saved->set_saved_unix_ns(on_disk->saved_unix_ns);
+      saved->set_key_frames(on_disk->key_frames);
+      saved->set_bytes(on_disk->bytes);
+    }
+  }
   return grpc::Status::OK;
 }
 

@@ -36,7 +36,16 @@ std::filesystem::path InFolder(const std::filesystem::path& dir) {
 MapsStore::MapsStore(const std::filesystem::path& dir, CounterSet& events)
     : events_(events), db_(InFolder(dir)) {
   db_.Exec(kSchema);
+  sqlite::Statement s(db_, "SELECT saved_unix_ns, key_frames, length(state) FROM maps");
+  if (s.Step()) {
+    on_disk_ = Summary{s.Int(0), static_cast<uint64_t>(s.Int(1)), static_cast<uint64_t>(s.Int(2))};
+  }
   thread_ = std::thread([this] { Run(); });
+}
+
+std::optional<MapsStore::Summary> MapsStore::OnDisk() const {
+  std::lock_guard lock(on_disk_mutex_);
+  return on_disk_;
 }
 
 MapsStore::~MapsStore() {
@@ -80,6 +89,8 @@ void MapsStore::Clear() {
   }
   std::lock_guard lock(db_mutex_);
   db_.Exec("DELETE FROM maps");
+  std::lock_guard on_disk(on_disk_mutex_);
+  on_disk_.reset();
 }
 
 void MapsStore::Run() {
@@ -111,6 +122,10 @@ void MapsStore::Write(const std::string& bytes, uint64_t key_frames) {
         .Bind(2, static_cast<int64_t>(key_frames))
         .BindBlob(3, bytes)
         .Run();
+    {
+      std::lock_guard on_disk(on_disk_mutex_);
+      on_disk_ = Summary{now, key_frames, bytes.size()};
+    }
     events_.Increment("maps_saved");
   } catch (const std::exception& e) {
     // The maps in memory are intact; the next save tries again.

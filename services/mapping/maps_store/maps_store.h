@@ -48,6 +48,15 @@ class MapsStore {
 
   const std::filesystem::path& path() const { return db_.path(); }
 
+  // What is on disk now (for GetStatus): the newest save, found at opening or written since;
+  // nothing when no maps are saved (none yet, or cleared). Any thread.
+  struct Summary {
+    int64_t saved_unix_ns = 0;
+    uint64_t key_frames = 0;
+    uint64_t bytes = 0;
+  };
+  std::optional<Summary> OnDisk() const;
+
  private:
   void Run();
   void Write(const std::string& bytes, uint64_t key_frames);
@@ -55,6 +64,8 @@ class MapsStore {
   CounterSet& events_;
   sqlite::Database db_;
   mutable std::mutex db_mutex_;
+  mutable std::mutex on_disk_mutex_;
+  std::optional<Summary> on_disk_;
 
   std::mutex mutex_;
   std::condition_variable changed_;

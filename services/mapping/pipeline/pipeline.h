@@ -70,6 +70,9 @@ class Pipeline {
   // (then the snapshots carry them): a planner asking right after a restart gets the maps as
   // saved (MapsSnapshot::resumed_unconfirmed), not "no map yet". Null otherwise (any thread).
   std::shared_ptr<const mobile_mapping::MapsSnapshot> ResumedMapsBeforeFirstFrame() const;
+  // The durable maps' store (maps.persist with state.dir), or nullptr: set at construction,
+  // thread-safe.
+  const MapsStore* maps_store() const { return maps_store_.get(); }
 
  private:
   void Run();

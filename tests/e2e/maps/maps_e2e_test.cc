@@ -763,6 +763,16 @@ TEST_F(MapsFromPublishedFrames, TheMapsSurviveARestart) {
   ASSERT_NO_FATAL_FAILURE(Restart("epmapd-1.log"));
   EXPECT_TRUE(std::filesystem::exists(work_ / "state" / "maps.sqlite3"));
   EXPECT_EQ(events("maps_resumed"), 1u);
+  {
+    // GetStatus says what is on disk: the maps of the 8 key frames, saved at the shutdown.
+    v1::ServiceStatus status;
+    ASSERT_TRUE(epmapd_->Status(&status).ok());
+    ASSERT_TRUE(status.has_saved_maps());
+    EXPECT_TRUE(status.saved_maps().saved());
+    EXPECT_EQ(status.saved_maps().key_frames(), 8u);
+    EXPECT_GT(status.saved_maps().bytes(), 1000u);
+    EXPECT_EQ(status.saved_maps().path(), (work_ / "state" / "maps.sqlite3").string());
+  }
   const v1::PerceptualMap at_start = perceptual_map();
   EXPECT_TRUE(at_start.resumed_unconfirmed());
   EXPECT_TRUE(same_segments(at_start, before)) << at_start.DebugString();
@@ -833,6 +843,11 @@ TEST_F(MapsFromPublishedFrames, TheMapsSurviveARestart) {
   ASSERT_EQ(code, 0) << out;
   EXPECT_NE(out.find("{\"key_frames_dropped\":1,\"saved_maps_cleared\":true}"), std::string::npos)
       << out;
+  {
+    v1::ServiceStatus status;
+    ASSERT_TRUE(epmapd_->Status(&status).ok());
+    EXPECT_FALSE(status.saved_maps().saved());  // cleared at once
+  }
   pub_->Frame(stamp(i++), 6.6, 0.0, false);
   WaitForKeyFrames(2);
   EXPECT_EQ(events("maps_reset"), 1u);

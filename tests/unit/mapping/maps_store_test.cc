@@ -17,6 +17,7 @@ TEST(MapsStore, KeepsTheNewestSavedMapsAcrossReopening) {
   {
     MapsStore store(dir, events);
     EXPECT_FALSE(store.Load().has_value());  // nothing saved yet
+    EXPECT_FALSE(store.OnDisk().has_value());
     store.Offer(std::string("first\0state", 11), 3);
     store.Flush();
     const auto saved = store.Load();
@@ -24,6 +25,11 @@ TEST(MapsStore, KeepsTheNewestSavedMapsAcrossReopening) {
     EXPECT_EQ(saved->bytes, std::string("first\0state", 11));  // bytes, not text
     EXPECT_EQ(saved->key_frames, 3u);
     EXPECT_GT(saved->saved_unix_ns, 0);
+    const auto on_disk = store.OnDisk();
+    ASSERT_TRUE(on_disk.has_value());
+    EXPECT_EQ(on_disk->saved_unix_ns, saved->saved_unix_ns);
+    EXPECT_EQ(on_disk->key_frames, 3u);
+    EXPECT_EQ(on_disk->bytes, 11u);
     // Offers faster than the disk: the newest wins, none is torn.
     for (int i = 0; i < 50; ++i) store.Offer(std::string(1000 + i, 'a' + i % 26), 10 + i);
   }  // the destructor writes what is pending
@@ -35,6 +41,12 @@ TEST(MapsStore, KeepsTheNewestSavedMapsAcrossReopening) {
   ASSERT_TRUE(saved.has_value());
   EXPECT_EQ(saved->key_frames, 59u);
   EXPECT_EQ(saved->bytes, std::string(1049, 'a' + 49 % 26));
+  // What a reopened store reports is what the file holds.
+  const auto on_disk = reopened.OnDisk();
+  ASSERT_TRUE(on_disk.has_value());
+  EXPECT_EQ(on_disk->saved_unix_ns, saved->saved_unix_ns);
+  EXPECT_EQ(on_disk->key_frames, 59u);
+  EXPECT_EQ(on_disk->bytes, 1049u);
 }
 
 TEST(MapsStore, ClearForgetsTheSavedAndThePendingMaps) {
@@ -47,6 +59,7 @@ TEST(MapsStore, ClearForgetsTheSavedAndThePendingMaps) {
   store.Offer(std::string(1 << 20, 'x'), 6);  // perhaps still pending: dropped, or deleted
   store.Clear();
   EXPECT_FALSE(store.Load().has_value());
+  EXPECT_FALSE(store.OnDisk().has_value());
   store.Flush();
   EXPECT_FALSE(store.Load().has_value());
   store.Offer("new maps", 1);  // and saving goes on
