@@ -43,6 +43,8 @@ uint64_t MergedStops(const mobile_mapping::MapperCounters& c) {
 
 void Pipeline::OpenMapsStore() {
   if (!config_.maps.enabled || !config_.maps.persist || config_.state_dir.empty()) return;
+  // A head or a fixed rig builds no maps: a store there would resume maps nothing updates.
+  if (config_.mode != "auto" && config_.mode != "mobile-base") return;
   try {
     maps_store_ = std::make_unique<MapsStore>(config_.state_dir, events_);
   } catch (const std::exception& e) {

@@ -939,9 +939,21 @@ TEST_F(MapsFromPublishedFrames, SavedMapsOfAnotherCameraAreNotResumed) {
   EXPECT_EQ(map.segments_size(), 0);
   EXPECT_NE(ReadText(work_ / "epmapd.log").find("made with another camera"), std::string::npos);
 
+  // The same state folder under a head (no maps): nothing is resumed or served from it.
+  epmapd_args_.insert(epmapd_args_.end(), {"--mode", "head"});
+  ASSERT_NO_FATAL_FAILURE(Restart("epmapd-2.log"));
+  EXPECT_EQ(map_status(&map).error_code(), grpc::StatusCode::FAILED_PRECONDITION);
+  {
+    v1::ServiceStatus status;
+    ASSERT_TRUE(epmapd_->Status(&status).ok());
+    EXPECT_FALSE(status.has_saved_maps());
+    EXPECT_EQ(testing::Epmapd::Count(status.events(), "maps_resumed"), 0u);
+  }
+  epmapd_args_.resize(epmapd_args_.size() - 2);
+
   // The new maps made no stop, so the store still holds the first ones: a restart serves them
   // again, until a reset, which stops serving them at once, before any frame.
-  ASSERT_NO_FATAL_FAILURE(Restart("epmapd-2.log"));
+  ASSERT_NO_FATAL_FAILURE(Restart("epmapd-3.log"));
   ASSERT_TRUE(map_status(&map).ok());
   EXPECT_TRUE(map.resumed_unconfirmed());
   grpc::ClientContext context;
