@@ -263,7 +263,10 @@ void Pipeline::RunMaps(const StereoFrame& frame, const stereo::Rectifier& rectif
     stage_ms_.Add("maps.open_stop",
                   std::chrono::duration<double, std::milli>(Clock::now() - t1).count());
   } else {
+    const auto t1 = Clock::now();
     maps_ = mapper_->Snapshot();
+    stage_ms_.Add("maps.snapshot",
+                  std::chrono::duration<double, std::milli>(Clock::now() - t1).count());
   }
   snapshot.maps = maps_;
 }
