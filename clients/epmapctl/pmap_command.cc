@@ -1,8 +1,8 @@
 // epmapctl pmap --out map.svg|map.json: the perceptual map of a mobile base (issue 6).
 // .json in the layout `epmap-bench maps` writes (metres, world frame = the robot's start
-// pose): {"stamp_ns","includes_open_stop","segments":[{"id","x1","y1","x2","y2","view_id",
-// "observations"}],"path":[[x,y]],"boundary":[[x,y]],"inner_boundary":[[x,y]],"views":[...]};
-// .svg a picture for people.
+// pose): {"stamp_ns","includes_open_stop","resumed_unconfirmed","segments":[{"id","x1","y1",
+// "x2","y2","view_id","observations"}],"path":[[x,y]],"boundary":[[x,y]],
+// "inner_boundary":[[x,y]],"views":[...]}; .svg a picture for people.
 
 #include <algorithm>
 #include <cstdio>
