@@ -160,7 +160,8 @@ class Pipeline {
   std::vector<mobile_mapping::JointLimit> joint_limits_;  // of the chain's joints, from the URDF
   std::shared_ptr<const mobile_mapping::MapsSnapshot> maps_;
   // Durable maps (maps.persist with state.dir; pipeline_maps.cc): opened at construction (set
-  // once, then shared with RequestMapsReset); the first mapper resumes what it holds.
+  // once, then shared with RequestMapsReset and GetStatus); what it holds is resumed into
+  // mapper_ then too, and served from resumed_maps_ until the snapshots carry maps.
   std::unique_ptr<MapsStore> maps_store_;
   mutable std::mutex resumed_maps_mutex_;
   std::shared_ptr<const mobile_mapping::MapsSnapshot> resumed_maps_;
