@@ -463,7 +463,11 @@ std::shared_ptr<const MapsSnapshot> MobileMapper::SnapshotWithOpenStop() const {
 std::shared_ptr<const MapsSnapshot> MobileMapper::Snapshot() const {
   auto s = std::make_shared<MapsSnapshot>();
   s->stamp_ns = last_stamp_ns_;
-  s->perceptual = perceptual_.Map(true);
+  if (!published_perceptual_ || published_perceptual_revision_ != perceptual_.revision()) {
+    published_perceptual_ = perceptual_.Map(true);
+    published_perceptual_revision_ = perceptual_.revision();
+  }
+  s->perceptual = *published_perceptual_;
   s->grid = grid_;  // deep copy
   s->poses = poses_.records();
   s->counters = counters_;

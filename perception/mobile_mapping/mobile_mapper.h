@@ -334,6 +334,11 @@ class MobileMapper {
   int64_t last_stamp_ns_ = 0;
   cv::Size image_size_;
   bool restore_unconfirmed_ = false;
+  // The perceptual map the last Snapshot() handed out, kept while perceptual_.revision() says
+  // it still holds: while the base drives between stops no view joins, and the boundary
+  // (paper 003 Sec. III-D) grows with the map and the path. Single-threaded like the rest.
+  mutable std::optional<perceptual_map::PerceptualMap> published_perceptual_;
+  mutable uint64_t published_perceptual_revision_ = 0;
   // Back to a mapper that has seen nothing (the restored maps were not the odometry's).
   void ClearMaps();
 };

@@ -1,6 +1,7 @@
 #include "perception/perceptual_map/perceptual_mapper.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <set>
@@ -35,7 +36,19 @@ void PerceptualMapParams::Validate() const {
   }
 }
 
-PerceptualMapper::PerceptualMapper(const PerceptualMapParams& params) : params_(params) {
+namespace {
+
+// Revisions are drawn from one counter for every mapper in the process, so a mapper replaced
+// by a new one (a reset) never repeats the revision a caller cached.
+uint64_t NextRevision() {
+  static std::atomic<uint64_t> next{1};
+  return next.fetch_add(1, std::memory_order_relaxed);
+}
+
+}  // namespace
+
+PerceptualMapper::PerceptualMapper(const PerceptualMapParams& params)
+    : params_(params), revision_(NextRevision()) {
   params_.Validate();
 }
 
@@ -77,6 +90,7 @@ void PerceptualMapper::Restore(State s) {
   for (const int64_t id : s.latest_global_id) {
     if (id < -1 || id >= static_cast<int64_t>(s.next_id)) fail("object id " + std::to_string(id));
   }
+  revision_ = NextRevision();
   segments_ = std::move(s.segments);
   views_ = std::move(s.views);
   has_latest_ = s.has_latest;
@@ -128,6 +142,7 @@ AddViewResult PerceptualMapper::AddView(int64_t stamp_ns,
     result.skipped = true;
     return result;
   }
+  revision_ = NextRevision();
   last_stamp_ns_ = stamp_ns;
   cur.global_id.assign(cur.objects.size(), -1);
   cur.record = static_cast<uint32_t>(views_.size());

@@ -101,6 +101,11 @@ class PerceptualMapper {
   size_t skipped_views() const { return skipped_views_; }
   size_t expansions() const { return expansions_; }
   const PerceptualMapParams& params() const { return params_; }
+  // Changes whenever what Map() returns may change (a view that was not blank, a restore), and
+  // is never the same for two mappers built apart: a caller may keep Map()'s result while the
+  // revision stays (the boundary, III-D, costs time that grows with the map and the path).
+  // A copy has its original's revision, as it has its map.
+  uint64_t revision() const { return revision_; }
 
   // Everything the mapper has built, for saving a map and resuming it (mobile_mapping's state).
   struct State {
@@ -143,6 +148,7 @@ class PerceptualMapper {
   size_t skipped_views_ = 0;
   size_t expansions_ = 0;
   int64_t last_stamp_ns_ = 0;
+  uint64_t revision_;
 };
 
 // Accumulated turn of a pose: the heading of its base x axis in the world frame.

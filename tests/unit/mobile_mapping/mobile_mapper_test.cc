@@ -5,6 +5,7 @@
 #include <limits>
 #include <numbers>
 #include <opencv2/imgproc.hpp>
+#include <string>
 #include <string_view>
 
 #include "perception/localisation/pose_corrector.h"
@@ -184,6 +185,52 @@ TEST_F(MobileMapperTest, TheOpenStopIsInTheProvisionalSnapshotOnly) {
             provisional->poses.back().T_world_base.matrix());
   // Without an open stop the two snapshots agree.
   EXPECT_FALSE(mapper.SnapshotWithOpenStop()->includes_open_stop);
+}
+
+// The snapshot keeps the perceptual map it handed out until the map changes: every snapshot
+// must still show the map as it is now, through stops, restores and dropped maps.
+void ExpectSnapshotShowsTheMapNow(const MobileMapper& mapper, const std::string& when) {
+  const auto now = mapper.perceptual().Map(true);
+  const auto snap = mapper.Snapshot();
+  ASSERT_EQ(snap->perceptual.segments.size(), now.segments.size()) << when;
+  for (size_t i = 0; i < now.segments.size(); ++i) {
+    EXPECT_EQ(snap->perceptual.segments[i].id, now.segments[i].id) << when;
+    EXPECT_EQ(snap->perceptual.segments[i].a, now.segments[i].a) << when;
+    EXPECT_EQ(snap->perceptual.segments[i].b, now.segments[i].b) << when;
+  }
+  EXPECT_EQ(snap->perceptual.views.size(), now.views.size()) << when;
+  EXPECT_EQ(snap->perceptual.path.size(), now.path.size()) << when;
+  EXPECT_EQ(snap->perceptual.boundary.inner_ids, now.boundary.inner_ids) << when;
+  EXPECT_EQ(snap->perceptual.boundary.outer_ids, now.boundary.outer_ids) << when;
+  EXPECT_EQ(snap->perceptual.stamp_ns, now.stamp_ns) << when;
+}
+
+TEST_F(MobileMapperTest, EverySnapshotShowsThePerceptualMapAsItIsNow) {
+  MobileMapper mapper(testing::BumblebeeLikeCamera(), Params());
+  size_t views = 0, unchanged = 0;
+  for (size_t i = 0; i < frames_->size(); ++i) {
+    const auto before = mapper.Snapshot();
+    ASSERT_TRUE(mapper.AddKeyFrame((*frames_)[i]).accepted);
+    ExpectSnapshotShowsTheMapNow(mapper, "after key frame " + std::to_string(i));
+    const auto after = mapper.Snapshot();
+    if (after->perceptual.views.size() != before->perceptual.views.size()) ++views;
+    if (after->perceptual.segments.size() == before->perceptual.segments.size()) ++unchanged;
+  }
+  EXPECT_GE(views, 3u);      // the map grew along the run ...
+  EXPECT_GE(unchanged, 5u);  // ... and stayed between stops, where the kept map is handed out
+  mapper.Flush();
+  ExpectSnapshotShowsTheMapNow(mapper, "after the flush");
+
+  // A mapper that took over saved maps, then dropped them for a frame that does not continue.
+  const std::string saved = mapper.SaveState();
+  MobileMapper resumed(testing::BumblebeeLikeCamera(), Params());
+  ExpectSnapshotShowsTheMapNow(resumed, "fresh");
+  ASSERT_TRUE(resumed.RestoreState(saved, nullptr));
+  ExpectSnapshotShowsTheMapNow(resumed, "restored");
+  EXPECT_EQ(resumed.Snapshot()->perceptual.segments.size(),
+            mapper.Snapshot()->perceptual.segments.size());
+  ASSERT_TRUE(resumed.AddKeyFrame(frames_->front()).restored_maps_dropped.has_value());
+  ExpectSnapshotShowsTheMapNow(resumed, "dropped");
 }
 
 TEST_F(MobileMapperTest, RefusesBadKeyFramesAndKeepsTheMapsIntact) {

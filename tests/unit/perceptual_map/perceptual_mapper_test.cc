@@ -184,5 +184,30 @@ TEST(PerceptualMapper, TheLatestViewIsShownWithoutChangingTheMapper) {
   EXPECT_EQ(mapper.Map(true).segments.size(), shown);
 }
 
+// Callers keep Map()'s result while the revision stays: it must change with everything that
+// changes the map, and only then.
+TEST(PerceptualMapper, TheRevisionChangesExactlyWhenTheMapMayChange) {
+  PerceptualMapper mapper;
+  const uint64_t fresh = mapper.revision();
+  EXPECT_NE(PerceptualMapper().revision(), fresh);  // another mapper: never the same
+  mapper.AddView(10, Points(kCorridor, Pose(2, 0, 0), 4, 1), Pose(2, 0, 0));
+  const uint64_t one_view = mapper.revision();
+  EXPECT_NE(one_view, fresh);
+  mapper.AddView(11, {}, Pose(2.5, 0, 0));  // blank: the map stays
+  EXPECT_EQ(mapper.revision(), one_view);
+  EXPECT_THROW(mapper.AddView(5, Points(kCorridor, Pose(2, 0, 0), 4, 2), Pose(2, 0, 0)),
+               std::invalid_argument);
+  EXPECT_EQ(mapper.revision(), one_view);
+  const PerceptualMapper copy = mapper;  // same map, same revision
+  EXPECT_EQ(copy.revision(), one_view);
+  mapper.AddView(12, Points(kCorridor, Pose(4, 0, 0), 4, 3), Pose(4, 0, 0));
+  EXPECT_NE(mapper.revision(), one_view);
+  EXPECT_EQ(copy.revision(), one_view);
+  PerceptualMapper restored;
+  const uint64_t before_restore = restored.revision();
+  restored.Restore(mapper.SavedState());
+  EXPECT_NE(restored.revision(), before_restore);
+}
+
 }  // namespace
 }  // namespace epmap
