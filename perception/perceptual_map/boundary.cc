@@ -1,10 +1,14 @@
 #include "perception/perceptual_map/boundary.h"
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <set>
 #include <stdexcept>
+
+#include "perception/perceptual_map/box_grid.h"
 
 namespace epmap::perceptual_map {
 
@@ -12,6 +16,9 @@ void BoundaryParams::Validate() const {
   if (objects_per_side < 1) throw std::invalid_argument("boundary: objects_per_side must be >= 1");
   if (!(max_distance_m > 0)) throw std::invalid_argument("boundary: max_distance_m must be > 0");
   if (!(path_sample_m > 0)) throw std::invalid_argument("boundary: path_sample_m must be > 0");
+  if (!(index_cell_m >= 0) || !std::isfinite(index_cell_m)) {
+    throw std::invalid_argument("boundary: index_cell_m must be >= 0 and finite");
+  }
 }
 
 namespace {
@@ -20,12 +27,25 @@ double Cross(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
   return a.x() * b.y() - a.y() * b.x();
 }
 
-// The path without repeated points (stops), as lines with their arc length.
+Eigen::AlignedBox2d BoxOf(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+  Eigen::AlignedBox2d box(a);
+  box.extend(b);
+  return box;
+}
+
+Eigen::AlignedBox2d BoxAround(const Eigen::Vector2d& q, double radius) {
+  return {q - Eigen::Vector2d::Constant(radius), q + Eigen::Vector2d::Constant(radius)};
+}
+
+// The path without repeated points (stops), as lines with their arc length, indexed by cell.
 struct PathLines {
   std::vector<Eigen::Vector2d> points;
   std::vector<double> arc;  // arc length at each point
+  BoxGrid index;            // line i spans points[i], points[i + 1]
+  double cell_m;
 
-  explicit PathLines(const std::vector<Eigen::Vector2d>& path) {
+  PathLines(const std::vector<Eigen::Vector2d>& path, double index_cell_m)
+      : index(index_cell_m), cell_m(index_cell_m) {
     for (const auto& p : path) {
       if (!p.allFinite()) continue;
       if (points.empty() || (p - points.back()).norm() > 1e-6) {
@@ -33,10 +53,19 @@ struct PathLines {
         points.push_back(p);
       }
     }
+    for (size_t i = 0; i < lines(); ++i) {
+      index.Add(static_cast<uint32_t>(i), BoxOf(points[i], points[i + 1]));
+    }
   }
   size_t lines() const { return points.size() < 2 ? 0 : points.size() - 1; }
 
+  // The lines whose box may meet `box`, ascending.
+  void Near(const Eigen::AlignedBox2d& box, std::vector<uint32_t>* out) const {
+    index.Query(box, out);
+  }
+
   // Nearest point of the path to q: line index, arc length there, signed side (> 0 = left).
+  // Of lines at the same distance, the first.
   struct Projection {
     size_t line = 0;
     double arc = 0;
@@ -45,19 +74,28 @@ struct PathLines {
   };
   Projection Project(const Eigen::Vector2d& q) const {
     Projection best;
-    for (size_t i = 0; i < lines(); ++i) {
-      const Eigen::Vector2d a = points[i];
-      const Eigen::Vector2d d = points[i + 1] - a;
-      const double t = std::clamp((q - a).dot(d) / d.squaredNorm(), 0.0, 1.0);
-      const double dist = (q - (a + t * d)).norm();
-      if (dist < best.distance) {
-        best.distance = dist;
-        best.line = i;
-        best.arc = arc[i] + t * d.norm();
-        best.side = Cross(d, q - a);
+    if (!q.allFinite() || lines() == 0) return best;
+    // Squares of growing half-width r around q: a line outside the square is at least r away,
+    // so once the nearest line inside is nearer than r, no line outside can beat or tie it.
+    std::vector<uint32_t> near;
+    for (double r = cell_m > 0 ? cell_m : 1.0;; r *= 2) {
+      const auto box = BoxAround(q, r);
+      Near(box, &near);
+      best = Projection{};
+      for (const uint32_t i : near) {
+        const Eigen::Vector2d a = points[i];
+        const Eigen::Vector2d d = points[i + 1] - a;
+        const double t = std::clamp((q - a).dot(d) / d.squaredNorm(), 0.0, 1.0);
+        const double dist = (q - (a + t * d)).norm();
+        if (dist < best.distance) {
+          best.distance = dist;
+          best.line = i;
+          best.arc = arc[i] + t * d.norm();
+          best.side = Cross(d, q - a);
+        }
       }
+      if (best.distance < r || index.Covers(box)) return best;
     }
-    return best;
   }
 
   // Sum of the signed turns between successive lines: > 0 when the path turns left overall.
@@ -105,13 +143,16 @@ Boundary ComputeBoundary(const std::vector<MapSegment>& segments,
                          const std::vector<Eigen::Vector2d>& path, const BoundaryParams& params) {
   params.Validate();
   Boundary out;
-  const PathLines lines(path);
+  const PathLines lines(path, params.index_cell_m);
 
   // 1. Objects crossing the path are not surfaces: the robot drove through them.
   std::vector<const MapSegment*> candidates;
+  std::vector<uint32_t> near_lines;
   for (const auto& s : segments) {
     bool crosses = false;
-    for (size_t i = 0; i < lines.lines() && !crosses; ++i) {
+    lines.Near(BoxOf(s.a, s.b), &near_lines);
+    for (size_t k = 0; k < near_lines.size() && !crosses; ++k) {
+      const size_t i = near_lines[k];
       crosses = SegmentsIntersect(s.a, s.b, lines.points[i], lines.points[i + 1]);
     }
     if (crosses) {
@@ -154,11 +195,19 @@ Boundary ComputeBoundary(const std::vector<MapSegment>& segments,
     for (int k = 0; k < n; ++k) samples.push_back(a + d * (static_cast<double>(k) / n));
   }
   samples.push_back(lines.points.back());
+  BoxGrid placed_index(params.index_cell_m);
+  for (size_t k = 0; k < placed.size(); ++k) {
+    placed_index.Add(static_cast<uint32_t>(k), BoxOf(placed[k].segment->a, placed[k].segment->b));
+  }
   std::vector<std::pair<double, const MapSegment*>> near[2];
+  std::vector<uint32_t> near_placed;
   for (const auto& q : samples) {
     near[0].clear();
     near[1].clear();
-    for (const auto& p : placed) {
+    // An object within max_distance_m of q has its box within that square around q.
+    placed_index.Query(BoxAround(q, params.max_distance_m), &near_placed);
+    for (const uint32_t k : near_placed) {
+      const Placed& p = placed[k];
       const double d = PointSegmentDistance(q, p.segment->a, p.segment->b);
       if (d <= params.max_distance_m) near[p.inner ? 1 : 0].emplace_back(d, p.segment);
     }

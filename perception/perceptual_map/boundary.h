@@ -18,6 +18,10 @@ struct BoundaryParams {
   int objects_per_side = 2;
   double max_distance_m = 6.0;  // objects farther than this from the path point are not kept
   double path_sample_m = 0.5;   // path lines are sampled at this spacing ("path line points")
+  // Cell of the grids that find the objects and path lines near a point (box_grid.h). Any
+  // size gives the same boundary; 0 compares everything with everything (the paper's direct
+  // reading: quadratic in the run's length, 99 ms on a 1 km path against 0.6 ms on 60 m).
+  double index_cell_m = 2.0;
   void Validate() const;
 };
 

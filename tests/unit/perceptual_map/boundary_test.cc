@@ -1,6 +1,10 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
+#include <random>
+#include <string>
 
 #include "perception/perceptual_map/boundary.h"
 
@@ -63,6 +67,53 @@ TEST(Boundary, GeometryHelpers) {
   // No path: no sides, everything outer, nothing removed.
   const auto b = perceptual_map::ComputeBoundary(Square(0, 1, 1), {}, {});
   EXPECT_EQ(b.outer_ids.size(), 4u);
+}
+
+void ExpectSameBoundary(const perceptual_map::Boundary& a, const perceptual_map::Boundary& b,
+                        const std::string& what) {
+  EXPECT_EQ(a.removed_on_path, b.removed_on_path) << what;
+  EXPECT_EQ(a.inner_ids, b.inner_ids) << what;
+  EXPECT_EQ(a.outer_ids, b.outer_ids) << what;
+  EXPECT_EQ(a.inner, b.inner) << what;
+  EXPECT_EQ(a.outer, b.outer) << what;
+  EXPECT_EQ(a.inner_is_left, b.inner_is_left) << what;
+}
+
+// The cell grids only choose what to compare: every cell size gives the boundary of comparing
+// everything with everything (index_cell_m = 0), on wandering paths that cross and revisit
+// themselves, on a lattice where many distances tie, and with objects that are not finite.
+TEST(Boundary, TheIndexGivesTheSameBoundaryAsComparingEverything) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (int trial = 0; trial < 24; ++trial) {
+    const bool lattice = trial % 4 == 3;  // whole-metre coordinates: ties everywhere
+    const auto coord = [&](double scale) {
+      const double v = u(rng) * scale;
+      return lattice ? std::round(v) : v;
+    };
+    std::vector<Eigen::Vector2d> path = {{0, 0}};
+    for (int i = 0; i < 60; ++i) path.push_back(path.back() + Eigen::Vector2d(coord(3), coord(3)));
+    if (trial % 5 == 0) path.push_back(path[3]);  // repeated points and a revisit
+    std::vector<MapSegment> segments;
+    for (uint32_t id = 1; id <= 150; ++id) {
+      const Eigen::Vector2d a = path[rng() % path.size()] + Eigen::Vector2d(coord(8), coord(8));
+      segments.push_back({id, a, a + Eigen::Vector2d(coord(2), coord(2)), 1, 1});
+    }
+    if (trial % 10 == 9) segments[5].b.x() = std::numeric_limits<double>::quiet_NaN();
+    perceptual_map::BoundaryParams everything;
+    everything.index_cell_m = 0;
+    const auto reference = perceptual_map::ComputeBoundary(segments, path, everything);
+    ASSERT_GT(reference.inner_ids.size() + reference.outer_ids.size(), 10u);
+    for (const double cell : {0.3, 2.0, 7.0}) {
+      perceptual_map::BoundaryParams p;
+      p.index_cell_m = cell;
+      ExpectSameBoundary(perceptual_map::ComputeBoundary(segments, path, p), reference,
+                         "trial " + std::to_string(trial) + ", cell " + std::to_string(cell));
+    }
+  }
+  perceptual_map::BoundaryParams bad;
+  bad.index_cell_m = -1;
+  EXPECT_THROW(perceptual_map::ComputeBoundary({}, {}, bad), std::invalid_argument);
 }
 
 }  // namespace

@@ -1,0 +1,116 @@
+// epmap-bench boundary [--lengths 60,250,1000,4000] [--repeat N]: how the perceptual map's
+// redundancy removal and boundary (paper 003, Sec. III-D) scale with the length of the run.
+// A service that maps for hours recomputes it each time a view joins the map (and at every
+// key frame of a stop, for the provisional map): comparing every object with every path point
+// grows with the map times the path. The cell-grid index (BoundaryParams::index_cell_m) is
+// timed beside that baseline (index_cell_m = 0) on the same synthetic maps, and both boundaries
+// are checked to be identical.
+//
+// The synthetic floor: a path of the given length in 50 m rows 4 m apart (a serpentine through
+// a large building), a view every metre, and at each view one 0.8 m wall segment 1.5 m to
+// either side with a few centimetres of scatter: about as many objects per metre as the
+// building scenario's perceptual map has.
+
+#include <CLI/CLI.hpp>
+#include <chrono>
+#include <iostream>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "bench/epmap_bench/command_registry.h"
+#include "bench/epmap_bench/summary.h"
+#include "perception/perceptual_map/boundary.h"
+
+namespace {
+
+namespace pm = epmap::perceptual_map;
+
+struct Floor {
+  std::vector<pm::MapSegment> segments;
+  std::vector<Eigen::Vector2d> path;
+};
+
+Floor Serpentine(int length_m) {
+  Floor f;
+  std::mt19937 rng(1);
+  std::uniform_real_distribution<double> scatter(-0.05, 0.05);
+  uint32_t id = 1;
+  for (int i = 0; i <= length_m; ++i) {
+    const int row = i / 50, along = i % 50;
+    const Eigen::Vector2d p(row % 2 ? 50 - along : along, 4.0 * row);
+    f.path.push_back(p);
+    for (const double side : {-1.5, 1.5}) {
+      pm::MapSegment s;
+      s.id = id++;
+      s.a = p + Eigen::Vector2d(scatter(rng), side + scatter(rng));
+      s.b = p + Eigen::Vector2d(0.8 + scatter(rng), side + scatter(rng));
+      f.segments.push_back(s);
+    }
+  }
+  return f;
+}
+
+bool Same(const pm::Boundary& a, const pm::Boundary& b) {
+  return a.removed_on_path == b.removed_on_path && a.inner_ids == b.inner_ids &&
+         a.outer_ids == b.outer_ids && a.inner == b.inner && a.outer == b.outer &&
+         a.inner_is_left == b.inner_is_left;
+}
+
+int Run(int argc, char** argv) {
+  CLI::App app("Paper 003 III-D boundary: cell-grid index vs comparing everything", argv[0]);
+  std::vector<int> lengths = {60, 250, 1000, 4000};
+  int repeat = 5;
+  app.add_option("--lengths", lengths, "path lengths, metres")->delimiter(',');
+  app.add_option("--repeat", repeat, "timed runs of each method per length (median reported)")
+      ->check(CLI::Range(1, 1000));
+  CLI11_PARSE(app, argc, argv);
+  for (const int l : lengths) {
+    if (l < 2 || l > 100000) {
+      std::cerr << "epmap-bench boundary: --lengths must be within 2..100000 m, got " << l << "\n";
+      return 2;
+    }
+  }
+  using epmap::bench::FormatFixed;
+  std::ostringstream j;
+  j << "{\"what\":\"paper 003 III-D redundancy removal and boundary, per call\""
+    << ",\"baseline\":\"every object against every path point and line (index_cell_m 0)\""
+    << ",\"index_cell_m\":" << FormatFixed(pm::BoundaryParams{}.index_cell_m, 2) << ",\"runs\":[";
+  bool all_same = true;
+  for (size_t k = 0; k < lengths.size(); ++k) {
+    const Floor floor = Serpentine(lengths[k]);
+    pm::BoundaryParams indexed, everything;
+    everything.index_cell_m = 0;
+    std::vector<double> indexed_ms, baseline_ms;
+    pm::Boundary a, b;
+    for (int r = 0; r < repeat; ++r) {  // interleaved: the machine's load falls on both alike
+      auto t0 = std::chrono::steady_clock::now();
+      a = pm::ComputeBoundary(floor.segments, floor.path, indexed);
+      indexed_ms.push_back(epmap::bench::MsSince(t0));
+      t0 = std::chrono::steady_clock::now();
+      b = pm::ComputeBoundary(floor.segments, floor.path, everything);
+      baseline_ms.push_back(epmap::bench::MsSince(t0));
+    }
+    const bool same = Same(a, b);
+    all_same = all_same && same;
+    const double im = epmap::bench::Median(indexed_ms), bm = epmap::bench::Median(baseline_ms);
+    j << (k ? "," : "") << "{\"path_m\":" << lengths[k] << ",\"objects\":" << floor.segments.size()
+      << ",\"kept\":" << a.inner_ids.size() + a.outer_ids.size()
+      << ",\"indexed_ms_median\":" << FormatFixed(im, 3)
+      << ",\"baseline_ms_median\":" << FormatFixed(bm, 3)
+      << ",\"ratio_to_baseline\":" << FormatFixed(im / bm, 4)
+      << ",\"same_boundary\":" << (same ? "true" : "false") << "}";
+  }
+  j << "],\"all_same\":" << (all_same ? "true" : "false") << "}";
+  std::cout << j.str() << "\n";
+  if (!all_same) {
+    std::cerr << "epmap-bench boundary: the indexed boundary differs from the baseline's\n";
+    return 1;
+  }
+  return 0;
+}
+
+}  // namespace
+
+EPMAP_BENCH_COMMAND(boundary, "boundary", "perceptual-map boundary (III-D) vs path length", Run);

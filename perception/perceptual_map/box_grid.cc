@@ -1,0 +1,66 @@
+#include "perception/perceptual_map/box_grid.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace epmap::perceptual_map {
+
+BoxGrid::BoxGrid(double cell_m) : cell_m_(cell_m > 0 && std::isfinite(cell_m) ? cell_m : 0) {}
+
+int64_t BoxGrid::CellOf(double v) const {
+  // Coordinates are metres in a building-sized frame; the clamp only keeps the cast defined.
+  return static_cast<int64_t>(std::floor(std::clamp(v / cell_m_, -1e12, 1e12)));
+}
+
+uint64_t BoxGrid::Key(int64_t ix, int64_t iy) {
+  return (static_cast<uint64_t>(ix) << 32) ^ (static_cast<uint64_t>(iy) & 0xffffffffULL);
+}
+
+void BoxGrid::Add(uint32_t item, const Eigen::AlignedBox2d& box) {
+  if (cell_m_ == 0 || !box.min().allFinite() || !box.max().allFinite()) {
+    everywhere_.push_back(item);
+    return;
+  }
+  const int64_t x0 = CellOf(box.min().x()), x1 = CellOf(box.max().x());
+  const int64_t y0 = CellOf(box.min().y()), y1 = CellOf(box.max().y());
+  if (max_ix_ < min_ix_) {
+    min_ix_ = x0, max_ix_ = x1, min_iy_ = y0, max_iy_ = y1;
+  } else {
+    min_ix_ = std::min(min_ix_, x0), max_ix_ = std::max(max_ix_, x1);
+    min_iy_ = std::min(min_iy_, y0), max_iy_ = std::max(max_iy_, y1);
+  }
+  for (int64_t ix = x0; ix <= x1; ++ix) {
+    for (int64_t iy = y0; iy <= y1; ++iy) cells_[Key(ix, iy)].push_back(item);
+  }
+}
+
+void BoxGrid::Query(const Eigen::AlignedBox2d& box, std::vector<uint32_t>* out) const {
+  out->assign(everywhere_.begin(), everywhere_.end());
+  if (!box.min().allFinite() || !box.max().allFinite()) {
+    for (const auto& [key, items] : cells_) out->insert(out->end(), items.begin(), items.end());
+  } else if (!cells_.empty()) {
+    // Only the part of the box over cells that hold items: a wide box costs no more than the
+    // index's extent.
+    const int64_t x0 = std::max(min_ix_, CellOf(box.min().x()));
+    const int64_t x1 = std::min(max_ix_, CellOf(box.max().x()));
+    const int64_t y0 = std::max(min_iy_, CellOf(box.min().y()));
+    const int64_t y1 = std::min(max_iy_, CellOf(box.max().y()));
+    for (int64_t ix = x0; ix <= x1; ++ix) {
+      for (int64_t iy = y0; iy <= y1; ++iy) {
+        const auto it = cells_.find(Key(ix, iy));
+        if (it != cells_.end()) out->insert(out->end(), it->second.begin(), it->second.end());
+      }
+    }
+  }
+  std::sort(out->begin(), out->end());
+  out->erase(std::unique(out->begin(), out->end()), out->end());
+}
+
+bool BoxGrid::Covers(const Eigen::AlignedBox2d& box) const {
+  if (cells_.empty()) return true;
+  if (!box.min().allFinite() || !box.max().allFinite()) return false;
+  return CellOf(box.min().x()) <= min_ix_ && CellOf(box.max().x()) >= max_ix_ &&
+         CellOf(box.min().y()) <= min_iy_ && CellOf(box.max().y()) >= max_iy_;
+}
+
+}  // namespace epmap::perceptual_map
