@@ -42,7 +42,8 @@ TEST(MapsBench, WritesTheMapsAndTheFigures) {
         "\"baseline_sgbm_ms_median\":", "\"correlation\":{\"enabled\":true,\"shifts_applied\":",
         "\"by_layer\":[{\"from_m\":0.10,\"to_m\":0.70,\"walls\":{\"iou\":",
         "\"iou_by_unknown_below\":{\"0.05\":{\"iou\":", "\"resolution_m\":0.100,",
-        "\"durable_state\":{\"bytes\":", "\"round_trip_exact\":true"}) {
+        "\"durable_state\":{\"bytes\":", "\"round_trip_exact\":true",
+        "\"committed_snapshot\":{\"key_frames\":"}) {
     EXPECT_NE(figures.find(key), std::string::npos) << key << " missing in " << figures;
   }
   EXPECT_EQ(figures.find("null"), std::string::npos) << figures;
@@ -171,6 +172,28 @@ TEST(EdgesBench, ScoresEdgeDisparitiesAgainstTheTruth) {
   EXPECT_NE(Slurp(dir / "err.txt").find("no gt_disparity0"), std::string::npos)
       << Slurp(dir / "err.txt");
   std::filesystem::remove_all(dir);
+}
+
+// `epmap-bench boundary`: the indexed boundary and the baseline's, per path length, identical
+// (the command fails otherwise); a length out of range is refused by name.
+TEST(BoundaryBench, TimesTheIndexedBoundaryBesideComparingEverything) {
+  const auto dir = testing::FreshTempDir("boundary-bench");
+  const auto bench = testing::BinDir() / "epmap-bench";
+  const std::string cmd = bench.string() + " boundary --lengths 60,400 --repeat 1 > " +
+                          (dir / "boundary.json").string();
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  const std::string json = Slurp(dir / "boundary.json");
+  for (const char* key :
+       {"\"path_m\":60,\"objects\":122,", "\"path_m\":400,", "\"indexed_ms_median\":",
+        "\"baseline_ms_median\":", "\"ratio_to_baseline\":", "\"all_same\":true"}) {
+    EXPECT_NE(json.find(key), std::string::npos) << key << " missing in " << json;
+  }
+  EXPECT_EQ(json.find("\"same_boundary\":false"), std::string::npos) << json;
+  EXPECT_EQ(json.find("null"), std::string::npos) << json;
+  const std::string bad =
+      bench.string() + " boundary --lengths 1 > /dev/null 2> " + (dir / "err.txt").string();
+  EXPECT_NE(std::system(bad.c_str()), 0);
+  EXPECT_NE(Slurp(dir / "err.txt").find("--lengths must be within"), std::string::npos);
 }
 
 }  // namespace
