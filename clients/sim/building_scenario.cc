@@ -61,9 +61,18 @@ Eigen::Isometry3d Planar(double x, double y, double theta) {
   return T;
 }
 
-std::vector<State> Timeline(const std::string& route_name, bool reverse) {
+std::vector<State> Timeline(const std::string& route_name, bool reverse, int passes) {
   std::vector<Eigen::Vector2d> route = BuildingRoute(route_name);
   if (reverse) std::reverse(route.begin(), route.end());
+  // Each further pass drives the route back from where the last one ended.
+  const std::vector<Eigen::Vector2d> one_pass = route;
+  for (int p = 1; p < passes; ++p) {
+    if (p % 2) {
+      route.insert(route.end(), one_pass.rbegin() + 1, one_pass.rend());
+    } else {
+      route.insert(route.end(), one_pass.begin() + 1, one_pass.end());
+    }
+  }
   std::vector<State> states;
   State s;
   s.x = route[0].x();
@@ -123,7 +132,7 @@ class BuildingScenario final : public Scenario {
   explicit BuildingScenario(const ScenarioOptions& options)
       : Scenario(options),
         world_(BuildBuilding(options.seed)),
-        states_(Timeline(options.route, options.reverse)),
+        states_(Timeline(options.route, options.reverse, options.passes)),
         true_urdf_(options.noise ? TruePanRobotUrdf() : std::string(PanRobotUrdf())),
         nominal_chain_(kinematics::UrdfChain::FromString(PanRobotUrdf())),
         true_chain_(kinematics::UrdfChain::FromString(true_urdf_)) {
@@ -230,8 +239,10 @@ class BuildingScenario final : public Scenario {
   std::string Describe() const override {
     return std::string("building") +
            (options().route != "corridors" ? " route " + options().route : "") +
-           (options().reverse ? " (reverse)" : "") + (options().walker ? " with a walker" : "") +
-           ": " + std::to_string(frames_) + " stereo frames " +
+           (options().reverse ? " (reverse)" : "") +
+           (options().passes > 1 ? ", " + std::to_string(options().passes) + " passes" : "") +
+           (options().walker ? " with a walker" : "") + ": " + std::to_string(frames_) +
+           " stereo frames " +
            (options().first_frame > 0 ? "from frame " + std::to_string(options().first_frame) + " "
                                       : std::string()) +
            std::to_string(camera_.width) + "x" + std::to_string(camera_.height) +

@@ -37,6 +37,7 @@ struct CommonFlags {
   double flicker_scale = 1;
   bool no_noise = false;
   bool reverse = false;
+  int passes = 1;
   std::string route = "corridors";
   bool disparity_every_frame = false;
   bool walker = false;
@@ -60,6 +61,9 @@ struct CommonFlags {
                     "building: both wheels travel this share more than the odometry counts "
                     "(0.01 = 1 %; default 0)");
     app->add_flag("--reverse", reverse, "building: drive the route in the reverse direction");
+    app->add_option("--passes", passes,
+                    "building: drive the route this many times, turning back at each end (a "
+                    "long run; default 1)");
     app->add_option("--route", route,
                     "building: corridors (default: two rooms, both corridors) or rooms (corridor "
                     "H, stepping into seven of the eight rooms)");
@@ -85,6 +89,7 @@ struct CommonFlags {
     o.flicker_scale = flicker_scale;
     o.noise = !no_noise;
     o.reverse = reverse;
+    o.passes = passes;
     o.odometry_scale_error = odometry_scale_error;
     o.route = route;
     o.disparity_every_frame = disparity_every_frame;

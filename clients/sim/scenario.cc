@@ -67,6 +67,13 @@ std::unique_ptr<Scenario> MakeScenario(const ScenarioOptions& options) {
   if (options.reverse && name != "building") {
     throw std::invalid_argument("--reverse applies to the building scenario only");
   }
+  if (options.passes < 1 || options.passes > 100) {
+    throw std::invalid_argument("--passes must be within 1..100, got " +
+                                std::to_string(options.passes));
+  }
+  if (options.passes != 1 && name != "building") {
+    throw std::invalid_argument("--passes applies to the building scenario only");
+  }
   if (options.route != "corridors" && name != "building") {
     throw std::invalid_argument("--route applies to the building scenario only");
   }

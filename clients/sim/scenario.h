@@ -38,6 +38,9 @@ struct ScenarioOptions {
   bool noise = true;               // false: exact encoders and odometry, true chain = URDF,
                                    // no image noise, no flicker (for exactness checks)
   bool reverse = false;            // building: drive the route backwards
+  // building: drive the route this many times, turning back at each end (2 = there and back):
+  // a long run for what grows with time (the maps, their cost, the odometry's drift).
+  int passes = 1;
   // building: both wheels travel this much more than the encoders count (UMBmark's scale
   // error E_s, e.g. 0.01 for a 1 % worn or under-inflated tyre); 0 = none, as before.
   double odometry_scale_error = 0;

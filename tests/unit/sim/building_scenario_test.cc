@@ -176,6 +176,37 @@ TEST_P(BuildingRoutes, ReverseStartsWhereTheForwardRunEnds) {
   EXPECT_EQ(odom0.theta, 0.0);
 }
 
+// A long run: the route there and back twice. The second pass is the reverse run (it turns
+// back where the first ended), the third the forward one again, and the odometry runs on.
+TEST_P(BuildingRoutes, PassesDriveTheRouteThereAndBack) {
+  ScenarioOptions o = Building(true, false, GetParam());
+  o.width = 32;
+  o.height = 24;
+  const Scenario* one = &testing::Shared(o);
+  o.passes = 3;
+  const Scenario* three = &testing::Shared(o);
+  const int n = one->frame_count();
+  // Each turn back adds a half turn on the spot (40 frames, 4 look-arounds) and takes away
+  // the look-around a single run starts with.
+  EXPECT_GT(three->frame_count(), 3 * n);
+  EXPECT_LT(three->frame_count(), 3 * n + 2 * 80);
+  const auto end_of_one = *one->Render(n - 1).gt_base;
+  const auto turned_back = *three->Render(n - 1).gt_base;  // where the first pass ends
+  EXPECT_NEAR(turned_back.x, end_of_one.x, 1e-9);
+  EXPECT_NEAR(turned_back.y, end_of_one.y, 1e-9);
+  const auto end = *three->Render(three->frame_count() - 1).gt_base;
+  EXPECT_NEAR(end.x, end_of_one.x, 1e-9);  // three passes end where one does
+  EXPECT_NEAR(end.y, end_of_one.y, 1e-9);
+  // Somewhere in the middle it is back at the start.
+  double nearest_start = 1e9;
+  for (int i = 2 * n - 100; i < 2 * n + 160 && i < three->frame_count(); ++i) {
+    const auto p = *three->Render(i).gt_base;
+    nearest_start = std::min(nearest_start, std::hypot(p.x, p.y));
+  }
+  EXPECT_LT(nearest_start, 1e-6);
+  EXPECT_NE(three->Describe().find("3 passes"), std::string::npos);
+}
+
 INSTANTIATE_TEST_SUITE_P(BuildingScenario, BuildingRoutes, ::testing::Values("corridors", "rooms"));
 
 TEST(BuildingScenario, FloorPlanAndDisparityRange) {

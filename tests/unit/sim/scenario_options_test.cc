@@ -34,6 +34,11 @@ TEST(ScenarioOptions, BadInputIsRefusedWithTheReason) {
   o.reverse = true;
   EXPECT_NE(ErrorOf(o).find("building scenario only"), std::string::npos);
   o.reverse = false;
+  o.passes = 2;
+  EXPECT_NE(ErrorOf(o).find("--passes applies to the building scenario only"), std::string::npos);
+  o.passes = 0;
+  EXPECT_NE(ErrorOf(o).find("--passes must be within 1..100, got 0"), std::string::npos);
+  o.passes = 1;
   o.route = "rooms";
   EXPECT_NE(ErrorOf(o).find("--route applies to the building scenario only"), std::string::npos);
   o.name = "building";

@@ -21,7 +21,8 @@ inline const Scenario& Shared(const ScenarioOptions& o) {
       std::to_string(o.frames) + "/" + std::to_string(o.seed) + "/" + std::to_string(o.noise) +
       std::to_string(o.reverse) + std::to_string(o.walker) + "/" + o.route + "/" +
       std::to_string(o.first_frame) + "/" + std::to_string(o.encoder_noise_scale) + "/" +
-      std::to_string(o.flicker_scale);
+      std::to_string(o.flicker_scale) + "/" + std::to_string(o.passes) + "/" +
+      std::to_string(o.odometry_scale_error) + "/" + std::to_string(o.supersample);
   auto& s = cache[key];
   if (!s) s = MakeScenario(o);
   return *s;
