@@ -222,6 +222,18 @@ MotionMasks RunExpectedPerception(const Prepared& p) {
   return out;
 }
 
+// Medians of the first, second, third and last quarter of the samples, in run order, as a
+// JSON array: whether a cost grows as the maps do over a long run.
+std::string MediansByQuarter(const std::vector<double>& v) {
+  std::string out = "[";
+  for (size_t q = 0; q < 4; ++q) {
+    const std::vector<double> part(v.begin() + static_cast<std::ptrdiff_t>(v.size() * q / 4),
+                                   v.begin() + static_cast<std::ptrdiff_t>(v.size() * (q + 1) / 4));
+    out += (q ? "," : "") + FormatFixed(Median(part), 2);
+  }
+  return out + "]";
+}
+
 struct RunResult {
   std::shared_ptr<const epmap::mobile_mapping::MapsSnapshot> maps;
   std::vector<epmap::mobile_mapping::KeyFrameReport> reports;
@@ -856,7 +868,7 @@ int RunCommand(int argc, char** argv) {
       std::ostringstream csv;
       csv << "#timestamp [ns],accepted,heading_source,odometry_dtheta [rad],visual_dtheta [rad],"
              "true_dtheta [rad],edge_points,features,tracked_pairs,inliers,stop_closed,"
-             "shift_x [m],shift_y [m],x [m],y [m],theta [rad]\n";
+             "shift_x [m],shift_y [m],x [m],y [m],theta [rad],key_frame [ms],snapshot [ms]\n";
       size_t k = 0;
       std::optional<double> prev_true;
       for (size_t i = 0; i < main.reports.size(); ++i) {
@@ -885,8 +897,13 @@ int RunCommand(int argc, char** argv) {
           const auto& T = poses[k - 1].T_world_base;
           csv << "," << FormatFixed(T.translation().x(), 4) << ","
               << FormatFixed(T.translation().y(), 4) << "," << FormatFixed(HeadingOf(T), 5);
+        } else {
+          csv << ",,,";
         }
-        csv << "\n";
+        const auto ms_at = [i](const std::vector<double>& v) {
+          return i < v.size() ? FormatFixed(v[i], 3) : std::string();
+        };
+        csv << "," << ms_at(main.key_frame_ms) << "," << ms_at(main.snapshot_ms) << "\n";
         if (true_theta) prev_true = true_theta;
       }
       WriteText(fs::path(out_dir) / "keyframes.csv", csv.str());
@@ -1183,7 +1200,9 @@ int RunCommand(int argc, char** argv) {
     j << ",\"timing\":{\"per_key_frame_ms_median\":" << FormatFixed(med, 2)
       << ",\"per_key_frame_ms_p90\":" << FormatFixed(Percentile(main.key_frame_ms, 0.9), 2)
       << ",\"per_key_frame_ms_max\":" << FormatFixed(Percentile(main.key_frame_ms, 1.0), 2)
+      << ",\"per_key_frame_ms_median_by_quarter\":" << MediansByQuarter(main.key_frame_ms)
       << ",\"snapshot_ms_median\":" << FormatFixed(Median(main.snapshot_ms), 2)
+      << ",\"snapshot_ms_median_by_quarter\":" << MediansByQuarter(main.snapshot_ms)
       << ",\"snapshot_ms_p90\":" << FormatFixed(Percentile(main.snapshot_ms, 0.9), 2)
       << ",\"committed_snapshot\":{\"key_frames\":" << main.committed_snapshot_ms.size()
       << ",\"ms_median\":" << FormatFixed(Median(main.committed_snapshot_ms), 2)
