@@ -1,6 +1,6 @@
-// epmap-bench boundary [--lengths 60,250,1000,4000] [--repeat N]: how the perceptual map's
-// redundancy removal and boundary (paper 003, Sec. III-D) scale with the length of the run.
-// A service that maps for hours recomputes it each time a view joins the map (and at every
+// epmap-bench boundary [--lengths 60,250,1000,4000] [--revisits 4,16] [--repeat N]: how the
+// perceptual map's redundancy removal and boundary (paper 003, Sec. III-D) scale with the length of
+// the run. A service that maps for hours recomputes it each time a view joins the map (and at every
 // key frame of a stop, for the provisional map): comparing every object with every path point
 // grows with the map times the path. The cell-grid index (BoundaryParams::index_cell_m) is
 // timed beside that baseline (index_cell_m = 0) on the same synthetic maps, and both boundaries
@@ -9,7 +9,7 @@
 // The synthetic floor: a path of the given length in 50 m rows 4 m apart (a serpentine through
 // a large building), a view every metre, and at each view one 0.8 m wall segment 1.5 m to
 // either side with a few centimetres of scatter: about as many objects per metre as the
-// building scenario's perceptual map has.
+// building scenario's perceptual map has. --revisits drives a 250 m floor again and again.
 
 #include <CLI/CLI.hpp>
 #include <chrono>
@@ -32,21 +32,27 @@ struct Floor {
   std::vector<Eigen::Vector2d> path;
 };
 
-Floor Serpentine(int length_m) {
+// A serpentine floor_m long, driven `passes` times (turning back at each end), each pass
+// seeing the walls afresh: the perceptual map is never corrected (paper 003, Sec. II), so a
+// floor driven again gets its walls again, and the map grows denser rather than wider.
+Floor Serpentine(int floor_m, int passes) {
   Floor f;
   std::mt19937 rng(1);
   std::uniform_real_distribution<double> scatter(-0.05, 0.05);
   uint32_t id = 1;
-  for (int i = 0; i <= length_m; ++i) {
-    const int row = i / 50, along = i % 50;
-    const Eigen::Vector2d p(row % 2 ? 50 - along : along, 4.0 * row);
-    f.path.push_back(p);
-    for (const double side : {-1.5, 1.5}) {
-      pm::MapSegment s;
-      s.id = id++;
-      s.a = p + Eigen::Vector2d(scatter(rng), side + scatter(rng));
-      s.b = p + Eigen::Vector2d(0.8 + scatter(rng), side + scatter(rng));
-      f.segments.push_back(s);
+  for (int pass = 0; pass < passes; ++pass) {
+    for (int step = pass == 0 ? 0 : 1; step <= floor_m; ++step) {
+      const int i = pass % 2 ? floor_m - step : step;
+      const int row = i / 50, along = i % 50;
+      const Eigen::Vector2d p(row % 2 ? 50 - along : along, 4.0 * row);
+      f.path.push_back(p);
+      for (const double side : {-1.5, 1.5}) {
+        pm::MapSegment s;
+        s.id = id++;
+        s.a = p + Eigen::Vector2d(scatter(rng), side + scatter(rng));
+        s.b = p + Eigen::Vector2d(0.8 + scatter(rng), side + scatter(rng));
+        f.segments.push_back(s);
+      }
     }
   }
   return f;
@@ -61,8 +67,13 @@ bool Same(const pm::Boundary& a, const pm::Boundary& b) {
 int Run(int argc, char** argv) {
   CLI::App app("Paper 003 III-D boundary: cell-grid index vs comparing everything", argv[0]);
   std::vector<int> lengths = {60, 250, 1000, 4000};
+  std::vector<int> revisits = {4, 16};
   int repeat = 5;
-  app.add_option("--lengths", lengths, "path lengths, metres")->delimiter(',');
+  app.add_option("--lengths", lengths, "path lengths, metres (one pass each)")->delimiter(',');
+  app.add_option("--revisits", revisits,
+                 "passes over one 250 m floor, each adding its walls again (the map grows "
+                 "denser)")
+      ->delimiter(',');
   app.add_option("--repeat", repeat, "timed runs of each method per length (median reported)")
       ->check(CLI::Range(1, 1000));
   CLI11_PARSE(app, argc, argv);
@@ -72,14 +83,27 @@ int Run(int argc, char** argv) {
       return 2;
     }
   }
+  for (const int p : revisits) {
+    if (p < 1 || p > 400) {
+      std::cerr << "epmap-bench boundary: --revisits must be within 1..400, got " << p << "\n";
+      return 2;
+    }
+  }
+  constexpr int kRevisitedFloorM = 250;
+  struct Case {
+    int floor_m, passes;
+  };
+  std::vector<Case> cases;
+  for (const int l : lengths) cases.push_back({l, 1});
+  for (const int p : revisits) cases.push_back({kRevisitedFloorM, p});
   using epmap::bench::FormatFixed;
   std::ostringstream j;
   j << "{\"what\":\"paper 003 III-D redundancy removal and boundary, per call\""
     << ",\"baseline\":\"every object against every path point and line (index_cell_m 0)\""
     << ",\"index_cell_m\":" << FormatFixed(pm::BoundaryParams{}.index_cell_m, 2) << ",\"runs\":[";
   bool all_same = true;
-  for (size_t k = 0; k < lengths.size(); ++k) {
-    const Floor floor = Serpentine(lengths[k]);
+  for (size_t k = 0; k < cases.size(); ++k) {
+    const Floor floor = Serpentine(cases[k].floor_m, cases[k].passes);
     pm::BoundaryParams indexed, everything;
     everything.index_cell_m = 0;
     std::vector<double> indexed_ms, baseline_ms;
@@ -95,7 +119,8 @@ int Run(int argc, char** argv) {
     const bool same = Same(a, b);
     all_same = all_same && same;
     const double im = epmap::bench::Median(indexed_ms), bm = epmap::bench::Median(baseline_ms);
-    j << (k ? "," : "") << "{\"path_m\":" << lengths[k] << ",\"objects\":" << floor.segments.size()
+    j << (k ? "," : "") << "{\"path_m\":" << cases[k].floor_m * cases[k].passes
+      << ",\"passes\":" << cases[k].passes << ",\"objects\":" << floor.segments.size()
       << ",\"kept\":" << a.inner_ids.size() + a.outer_ids.size()
       << ",\"indexed_ms_median\":" << FormatFixed(im, 3)
       << ",\"baseline_ms_median\":" << FormatFixed(bm, 3)

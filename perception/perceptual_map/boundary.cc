@@ -59,7 +59,7 @@ struct PathLines {
   }
   size_t lines() const { return points.size() < 2 ? 0 : points.size() - 1; }
 
-  // The lines whose box may meet `box`, ascending.
+  // The lines whose box may meet `box`, in no particular order.
   void Near(const Eigen::AlignedBox2d& box, std::vector<uint32_t>* out) const {
     index.Query(box, out);
   }
@@ -87,7 +87,7 @@ struct PathLines {
         const Eigen::Vector2d d = points[i + 1] - a;
         const double t = std::clamp((q - a).dot(d) / d.squaredNorm(), 0.0, 1.0);
         const double dist = (q - (a + t * d)).norm();
-        if (dist < best.distance) {
+        if (dist < best.distance || (dist == best.distance && i < best.line)) {
           best.distance = dist;
           best.line = i;
           best.arc = arc[i] + t * d.norm();
@@ -201,18 +201,32 @@ Boundary ComputeBoundary(const std::vector<MapSegment>& segments,
   }
   std::vector<std::pair<double, const MapSegment*>> near[2];
   std::vector<uint32_t> near_placed;
+  const size_t per_side = static_cast<size_t>(params.objects_per_side);
+  const double max_d = params.max_distance_m;
   for (const auto& q : samples) {
-    near[0].clear();
-    near[1].clear();
-    // An object within max_distance_m of q has its box within that square around q.
-    placed_index.Query(BoxAround(q, params.max_distance_m), &near_placed);
-    for (const uint32_t k : near_placed) {
-      const Placed& p = placed[k];
-      const double d = PointSegmentDistance(q, p.segment->a, p.segment->b);
-      if (d <= params.max_distance_m) near[p.inner ? 1 : 0].emplace_back(d, p.segment);
+    // Squares of growing half-width r around q: an object outside the square is at least r
+    // away, so once each side has its nearest few nearer than r, no object outside can beat or
+    // tie them. Where the map is dense (a floor driven many times) the first square settles
+    // most samples; an object within max_d has its box within the square of half-width max_d.
+    for (double r = params.index_cell_m > 0 ? std::min(params.index_cell_m, max_d) : max_d;;
+         r = std::min(2 * r, max_d)) {
+      near[0].clear();
+      near[1].clear();
+      placed_index.Query(BoxAround(q, r), &near_placed);
+      for (const uint32_t k : near_placed) {
+        const Placed& p = placed[k];
+        const double d = PointSegmentDistance(q, p.segment->a, p.segment->b);
+        if (d <= max_d) near[p.inner ? 1 : 0].emplace_back(d, p.segment);
+      }
+      const auto settled = [&](const std::vector<std::pair<double, const MapSegment*>>& side) {
+        return static_cast<size_t>(std::count_if(side.begin(), side.end(), [&](const auto& e) {
+                 return e.first < r;
+               })) >= per_side;
+      };
+      if (r >= max_d || (settled(near[0]) && settled(near[1]))) break;
     }
     for (auto& side : near) {
-      const size_t n = std::min(side.size(), static_cast<size_t>(params.objects_per_side));
+      const size_t n = std::min(side.size(), per_side);
       std::partial_sort(side.begin(), side.begin() + static_cast<std::ptrdiff_t>(n), side.end());
       for (size_t k = 0; k < n; ++k) kept.insert(side[k].second);
     }

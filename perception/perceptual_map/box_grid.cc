@@ -17,6 +17,7 @@ uint64_t BoxGrid::Key(int64_t ix, int64_t iy) {
 }
 
 void BoxGrid::Add(uint32_t item, const Eigen::AlignedBox2d& box) {
+  if (item >= seen_in_query_.size()) seen_in_query_.resize(static_cast<size_t>(item) + 1, 0);
   if (cell_m_ == 0 || !box.min().allFinite() || !box.max().allFinite()) {
     everywhere_.push_back(item);
     return;
@@ -35,9 +36,18 @@ void BoxGrid::Add(uint32_t item, const Eigen::AlignedBox2d& box) {
 }
 
 void BoxGrid::Query(const Eigen::AlignedBox2d& box, std::vector<uint32_t>* out) const {
-  out->assign(everywhere_.begin(), everywhere_.end());
+  out->clear();
+  const uint64_t query = ++queries_;
+  const auto take = [&](const std::vector<uint32_t>& items) {
+    for (const uint32_t item : items) {
+      if (seen_in_query_[item] == query) continue;
+      seen_in_query_[item] = query;
+      out->push_back(item);
+    }
+  };
+  take(everywhere_);
   if (!box.min().allFinite() || !box.max().allFinite()) {
-    for (const auto& [key, items] : cells_) out->insert(out->end(), items.begin(), items.end());
+    for (const auto& [key, items] : cells_) take(items);
   } else if (!cells_.empty()) {
     // Only the part of the box over cells that hold items: a wide box costs no more than the
     // index's extent.
@@ -48,12 +58,10 @@ void BoxGrid::Query(const Eigen::AlignedBox2d& box, std::vector<uint32_t>* out) 
     for (int64_t ix = x0; ix <= x1; ++ix) {
       for (int64_t iy = y0; iy <= y1; ++iy) {
         const auto it = cells_.find(Key(ix, iy));
-        if (it != cells_.end()) out->insert(out->end(), it->second.begin(), it->second.end());
+        if (it != cells_.end()) take(it->second);
       }
     }
   }
-  std::sort(out->begin(), out->end());
-  out->erase(std::unique(out->begin(), out->end()), out->end());
 }
 
 bool BoxGrid::Covers(const Eigen::AlignedBox2d& box) const {

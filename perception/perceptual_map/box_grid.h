@@ -16,11 +16,13 @@ class BoxGrid {
   // cell_m <= 0: one cell holds everything (every query returns every item).
   explicit BoxGrid(double cell_m);
 
-  // Item ids need not be dense. A box that is not finite is returned by every query.
+  // Items are numbered from 0 (ids index a table of the size of the largest). A box that is
+  // not finite is returned by every query.
   void Add(uint32_t item, const Eigen::AlignedBox2d& box);
 
   // The items whose box may intersect `box` (a superset of those that do: all items of the
-  // cells it touches), ascending, each once. Replaces *out.
+  // cells it touches), each once, in no particular order. Replaces *out. Not for concurrent
+  // calls on one grid (it marks the items it has seen).
   void Query(const Eigen::AlignedBox2d& box, std::vector<uint32_t>* out) const;
   // True when `box` covers every cell that holds an item (a query returns every item).
   bool Covers(const Eigen::AlignedBox2d& box) const;
@@ -32,6 +34,10 @@ class BoxGrid {
   double cell_m_;
   std::unordered_map<uint64_t, std::vector<uint32_t>> cells_;
   std::vector<uint32_t> everywhere_;  // cell_m <= 0, or boxes that are not finite
+  // Per item, the query that last returned it: an item spanning several cells is listed in
+  // each, and sorting the candidates to drop repeats cost more than the distances themselves.
+  mutable std::vector<uint64_t> seen_in_query_;
+  mutable uint64_t queries_ = 0;
   int64_t min_ix_ = 0, min_iy_ = 0, max_ix_ = -1, max_iy_ = -1;  // extent of cells_
 };
 

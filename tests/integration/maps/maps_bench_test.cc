@@ -179,12 +179,13 @@ TEST(EdgesBench, ScoresEdgeDisparitiesAgainstTheTruth) {
 TEST(BoundaryBench, TimesTheIndexedBoundaryBesideComparingEverything) {
   const auto dir = testing::FreshTempDir("boundary-bench");
   const auto bench = testing::BinDir() / "epmap-bench";
-  const std::string cmd = bench.string() + " boundary --lengths 60,400 --repeat 1 > " +
+  const std::string cmd = bench.string() + " boundary --lengths 60,400 --revisits 3 --repeat 1 > " +
                           (dir / "boundary.json").string();
   ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
   const std::string json = Slurp(dir / "boundary.json");
   for (const char* key :
-       {"\"path_m\":60,\"objects\":122,", "\"path_m\":400,", "\"indexed_ms_median\":",
+       {"\"path_m\":60,\"passes\":1,\"objects\":122,", "\"path_m\":400,",
+        "\"path_m\":750,\"passes\":3,\"objects\":1502,", "\"indexed_ms_median\":",
         "\"baseline_ms_median\":", "\"ratio_to_baseline\":", "\"all_same\":true"}) {
     EXPECT_NE(json.find(key), std::string::npos) << key << " missing in " << json;
   }
