@@ -234,10 +234,16 @@ Boundary ComputeBoundary(const std::vector<MapSegment>& segments,
 
   // 4. Boundary: the kept objects of each side in the order the path passes them, each one's
   // end points in that order too, joined from one object to the next.
-  std::sort(placed.begin(), placed.end(),
-            [](const Placed& x, const Placed& y) { return x.arc < y.arc; });
+  // Only the kept ones are ordered (a floor driven again keeps a few of many); objects the
+  // path passes at the same arc length go by id, so the order never depends on the sort.
+  std::vector<Placed> ordered;
   for (const auto& p : placed) {
-    if (!kept.count(p.segment)) continue;
+    if (kept.count(p.segment)) ordered.push_back(p);
+  }
+  std::sort(ordered.begin(), ordered.end(), [](const Placed& x, const Placed& y) {
+    return x.arc != y.arc ? x.arc < y.arc : x.segment->id < y.segment->id;
+  });
+  for (const auto& p : ordered) {
     auto& ids = p.inner ? out.inner_ids : out.outer_ids;
     auto& line = p.inner ? out.inner : out.outer;
     ids.push_back(p.segment->id);
