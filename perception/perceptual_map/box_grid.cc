@@ -24,6 +24,13 @@ void BoxGrid::Add(uint32_t item, const Eigen::AlignedBox2d& box) {
   }
   const int64_t x0 = CellOf(box.min().x()), x1 = CellOf(box.max().x());
   const int64_t y0 = CellOf(box.min().y()), y1 = CellOf(box.max().y());
+  if (x1 - x0 >= kMaxCellsPerItem || y1 - y0 >= kMaxCellsPerItem ||
+      (x1 - x0 + 1) * (y1 - y0 + 1) > kMaxCellsPerItem) {
+    // A box over very many cells (a wild segment, e.g. from a damaged saved map) is listed once
+    // for every query instead of once per cell: the same answers, and memory stays bounded.
+    everywhere_.push_back(item);
+    return;
+  }
   if (max_ix_ < min_ix_) {
     min_ix_ = x0, max_ix_ = x1, min_iy_ = y0, max_iy_ = y1;
   } else {

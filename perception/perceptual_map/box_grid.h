@@ -17,7 +17,8 @@ class BoxGrid {
   explicit BoxGrid(double cell_m);
 
   // Items are numbered from 0 (ids index a table of the size of the largest). A box that is
-  // not finite is returned by every query.
+  // not finite, or spans more than kMaxCellsPerItem cells, is returned by every query.
+  static constexpr int64_t kMaxCellsPerItem = 4096;
   void Add(uint32_t item, const Eigen::AlignedBox2d& box);
 
   // The items whose box may intersect `box` (a superset of those that do: all items of the

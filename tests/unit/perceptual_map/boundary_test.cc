@@ -81,7 +81,8 @@ void ExpectSameBoundary(const perceptual_map::Boundary& a, const perceptual_map:
 
 // The cell grids only choose what to compare: every cell size gives the boundary of comparing
 // everything with everything (index_cell_m = 0), on wandering paths that cross and revisit
-// themselves, on a lattice where many distances tie, and with objects that are not finite.
+// themselves, on a lattice where many distances tie, with objects that are not finite and
+// with one a million kilometres long (kept out of the cells: memory stays bounded).
 TEST(Boundary, TheIndexGivesTheSameBoundaryAsComparingEverything) {
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> u(-1, 1);
@@ -100,6 +101,10 @@ TEST(Boundary, TheIndexGivesTheSameBoundaryAsComparingEverything) {
       segments.push_back({id, a, a + Eigen::Vector2d(coord(2), coord(2)), 1, 1});
     }
     if (trial % 10 == 9) segments[5].b.x() = std::numeric_limits<double>::quiet_NaN();
+    if (trial % 10 == 8) {  // far from the path (so not removed as crossing it), and wild
+      segments[6].a = {1e6, 1e6};
+      segments[6].b = {1e6 + 1e9, 1e6 + 3e8};
+    }
     perceptual_map::BoundaryParams everything;
     everything.index_cell_m = 0;
     const auto reference = perceptual_map::ComputeBoundary(segments, path, everything);
