@@ -288,18 +288,14 @@ RunResult Run(const Prepared& p, epmap::mobile_mapping::MobileMapperParams param
       if (!standing) {
         auto c0 = std::chrono::steady_clock::now();
         (void)mapper.Snapshot();
-        out.committed_snapshot_ms.push_back(
-            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - c0)
-                .count());
+        out.committed_snapshot_ms.push_back(MsSince(c0));
         c0 = std::chrono::steady_clock::now();
         auto rebuilt = std::make_shared<epmap::mobile_mapping::MapsSnapshot>();
         rebuilt->perceptual = mapper.perceptual().Map(true);
         rebuilt->grid = mapper.grid();
         rebuilt->poses = mapper.poses().records();
         rebuilt->counters = mapper.counters();
-        out.recomputed_snapshot_ms.push_back(
-            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - c0)
-                .count());
+        out.recomputed_snapshot_ms.push_back(MsSince(c0));
       }
     }
     if (sgbm && !left.empty()) {
