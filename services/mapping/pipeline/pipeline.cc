@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <opencv2/imgproc.hpp>
+#include <utility>
 
 #include "perception/mobile_mapping/joint_limits.h"
 #include "services/mapping/config/camera_chain.h"
@@ -280,6 +281,7 @@ void Pipeline::Process(StereoFrame& frame) {
   const double recomputed = snapshot->recomputed_share;
   const auto unexpected = snapshot->unexpected;
   snapshots_.Publish(std::move(snapshot));
+  if (std::exchange(key_frame_awaits_publish_, false)) events_.Increment("maps_key_frames");
   if (unexpected) unexpected_hub_.Publish(unexpected);
   processed_++;
   figures_.Add("latency_ms", MsSince(frame.assembled));

@@ -166,6 +166,9 @@ class Pipeline {
   mutable std::mutex resumed_maps_mutex_;
   std::shared_ptr<const mobile_mapping::MapsSnapshot> resumed_maps_;
   uint64_t maps_saved_stops_ = 0;  // stops merged into the maps when they were last saved
+  // RunMaps took a key frame into this frame's snapshot: `maps_key_frames` is counted only once
+  // that snapshot is published, so a client that sees the count can already read those maps.
+  bool key_frame_awaits_publish_ = false;
   std::chrono::steady_clock::time_point maps_saved_at_;
   // A reset asked for and not yet done; taken with each save so that no save of the old maps
   // lands after the store was cleared.

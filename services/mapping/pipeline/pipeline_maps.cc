@@ -247,7 +247,7 @@ void Pipeline::RunMaps(const StereoFrame& frame, const stereo::Rectifier& rectif
                  *report.restored_maps_dropped);
     maps_saved_stops_ = 0;
   }
-  events_.Increment("maps_key_frames");
+  key_frame_awaits_publish_ = true;  // counted in ProcessFrame, after the snapshot is out
   if (report.group_closed) SaveMaps(false);
   if (report.edge_points == 0) events_.Increment("maps_key_frame_without_edges");
   if (report.view_skipped) events_.Increment("maps_view_without_objects");
