@@ -1,5 +1,8 @@
-// epmapctl grid --out grid.pgm|grid.png [--layer N | --max-height M]: the fuzzy occupancy grid
-// of a mobile base (issue 6), one height band, the bands a robot M tall can hit, or all combined.
+// epmapctl grid --out grid.pgm|grid.png [--layer N | --max-height M]
+//               [--region MIN_X,MIN_Y,MAX_X,MAX_Y | --around-robot SIDE]: the fuzzy occupancy
+// grid of a mobile base (issue 6), one height band, the bands a robot M tall can hit, or all
+// combined; the whole map, or a window of it (a box in the world frame, or a square around the
+// robot) as a local planner polls it.
 // .pgm is written with a YAML beside it in the layout ROS map_server loads (image, resolution,
 // origin, negate, occupied_thresh, free_thresh); .png is a picture for people.
 
@@ -8,6 +11,7 @@
 #include <fstream>
 #include <iostream>
 #include <optional>
+#include <vector>
 
 #include "clients/epmapctl/client.h"
 #include "epmap/v1/map_service.grpc.pb.h"
@@ -21,6 +25,8 @@ struct Args {
   std::string out;
   std::optional<uint32_t> layer;
   std::optional<double> max_height_m;
+  std::vector<double> region;  // min_x, min_y, max_x, max_y (m)
+  std::optional<double> around_robot_m;
   epmap::ctl::MapsWait wait;
 };
 
@@ -74,6 +80,14 @@ int Run(const ClientOptions& options, const Args& args) {
   epmap::v1::GetOccupancyGridRequest request;
   if (args.layer) request.set_layer(*args.layer);
   if (args.max_height_m) request.set_max_height_m(*args.max_height_m);
+  if (!args.region.empty()) {
+    auto* box = request.mutable_region();
+    box->set_min_x(args.region[0]);
+    box->set_min_y(args.region[1]);
+    box->set_max_x(args.region[2]);
+    box->set_max_y(args.region[3]);
+  }
+  if (args.around_robot_m) request.set_around_robot_m(*args.around_robot_m);
   args.wait.Apply(&request);
   epmap::v1::OccupancyGrid grid;
   const auto context = options.Context(args.wait.wait_ms);
@@ -98,12 +112,13 @@ int Run(const ClientOptions& options, const Args& args) {
     std::cerr << "epmapctl: " << ex.what() << "\n";
     return 1;
   }
-  std::printf("wrote %s%s%s: %ux%u cells of %.3f m, origin (%.3f, %.3f), %s (stamp %lld ns)%s%s\n",
-              out.string().c_str(), yaml.empty() ? "" : " and ", yaml.string().c_str(), e.width,
-              e.height, e.resolution_m, e.origin_x, e.origin_y, Describe(e).c_str(),
-              static_cast<long long>(grid.stamp_ns()),
-              grid.includes_open_stop() ? ", with the stop under way (provisional)" : "",
-              grid.resumed_unconfirmed() ? epmap::ctl::kResumedNote : "");
+  std::printf(
+      "wrote %s%s%s: %ux%u cells of %.3f m%s, origin (%.3f, %.3f), %s (stamp %lld ns)%s%s\n",
+      out.string().c_str(), yaml.empty() ? "" : " and ", yaml.string().c_str(), e.width, e.height,
+      e.resolution_m, grid.window() ? " (the window asked for)" : "", e.origin_x, e.origin_y,
+      Describe(e).c_str(), static_cast<long long>(grid.stamp_ns()),
+      grid.includes_open_stop() ? ", with the stop under way (provisional)" : "",
+      grid.resumed_unconfirmed() ? epmap::ctl::kResumedNote : "");
   return 0;
 }
 
@@ -117,6 +132,14 @@ void Setup(CLI::App& app, ClientOptions& options) {
   cmd->add_option("--max-height", args->max_height_m,
                   "the bands a robot this tall (m) can hit, combined (those starting below it)")
       ->excludes(layer);
+  auto* region = cmd->add_option("--region", args->region,
+                                 "only this box of the world frame: MIN_X,MIN_Y,MAX_X,MAX_Y (m); "
+                                 "cells the map has not seen are unknown")
+                     ->delimiter(',')
+                     ->expected(4);
+  cmd->add_option("--around-robot", args->around_robot_m,
+                  "only a square of this side (m) centred on the robot's corrected pose")
+      ->excludes(region);
   args->wait.AddOptions(cmd);
   cmd->callback([&options, args] { options.exit_code = Run(options, *args); });
 }

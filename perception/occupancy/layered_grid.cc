@@ -96,6 +96,17 @@ void WalkCells(const Eigen::Vector2d& a, const Eigen::Vector2d& b, Visit&& visit
   }
 }
 
+// The bytes of one cell, as GridExport describes them.
+void PutCell(const Cell& cell, double unknown_below, uint8_t* occupancy, uint8_t* confidence) {
+  *confidence = static_cast<uint8_t>(std::lround(255.0 * std::clamp(cell.confidence, 0.0F, 1.0F)));
+  if (cell.confidence < unknown_below) {
+    *occupancy = GridExport::kUnknown;
+    return;
+  }
+  const double occ = std::clamp(50.0 + 50.0 * (cell.occupied - cell.empty), 0.0, 100.0);
+  *occupancy = static_cast<uint8_t>(std::lround(occ));
+}
+
 }  // namespace
 
 LayeredGrid::LayeredGrid(const GridParams& params) : params_(params) {
@@ -433,13 +444,90 @@ GridExport LayeredGrid::ExportCells(const CellAt& cell_at, double unknown_below)
           cells[static_cast<size_t>(r + static_cast<uint32_t>(r_lo)) * static_cast<size_t>(width_) +
                 c + static_cast<uint32_t>(c_lo)];
       const size_t i = static_cast<size_t>(r) * e.width + c;
-      e.confidence[i] =
-          static_cast<uint8_t>(std::lround(255.0 * std::clamp(cell.confidence, 0.0F, 1.0F)));
-      if (cell.confidence < unknown_below) continue;
-      const double occ = std::clamp(50.0 + 50.0 * (cell.occupied - cell.empty), 0.0, 100.0);
-      e.occupancy[i] = static_cast<uint8_t>(std::lround(occ));
+      PutCell(cell, unknown_below, &e.occupancy[i], &e.confidence[i]);
     }
   }
+  return e;
+}
+
+CellWindow WindowOverBox(double resolution_m, double min_x, double min_y, double max_x,
+                         double max_y, int64_t max_cells_per_side) {
+  if (!(resolution_m > 0) || !std::isfinite(resolution_m)) {
+    throw std::invalid_argument("window: the resolution must be a positive number");
+  }
+  for (const double v : {min_x, min_y, max_x, max_y}) {
+    if (!std::isfinite(v)) throw std::invalid_argument("window: the box must be finite");
+  }
+  if (!(min_x < max_x) || !(min_y < max_y)) {
+    throw std::invalid_argument("window: the box needs min < max along x and along y");
+  }
+  // In cells first, as doubles: a box of 1e300 m must be refused, not overflow an int64.
+  const double lo_x = std::floor(min_x / resolution_m), lo_y = std::floor(min_y / resolution_m);
+  const double hi_x = std::ceil(max_x / resolution_m), hi_y = std::ceil(max_y / resolution_m);
+  const double limit = static_cast<double>(max_cells_per_side);
+  if (hi_x - lo_x > limit || hi_y - lo_y > limit || std::abs(lo_x) > 1e15 ||
+      std::abs(lo_y) > 1e15) {
+    throw std::invalid_argument("window: the box spans more than " +
+                                std::to_string(max_cells_per_side) + " cells along an axis");
+  }
+  CellWindow w;
+  w.ix0 = static_cast<int64_t>(lo_x);
+  w.iy0 = static_cast<int64_t>(lo_y);
+  // A box that ends exactly on a cell edge does not take the cell beyond it; one cell at least.
+  w.width = static_cast<uint32_t>(std::max(1.0, hi_x - lo_x));
+  w.height = static_cast<uint32_t>(std::max(1.0, hi_y - lo_y));
+  return w;
+}
+
+template <typename CellAt>
+GridExport LayeredGrid::ExportCellsIn(const CellWindow& window, const CellAt& cell_at,
+                                      double unknown_below) const {
+  GridExport e;
+  e.resolution_m = params_.resolution_m;
+  e.origin_x = static_cast<double>(window.ix0) * params_.resolution_m;
+  e.origin_y = static_cast<double>(window.iy0) * params_.resolution_m;
+  e.width = window.width;
+  e.height = window.height;
+  e.layer_count = static_cast<uint32_t>(layer_count());
+  e.layer_bounds_m = params_.layer_bounds_m;
+  e.occupancy.assign(window.cells(), GridExport::kUnknown);
+  e.confidence.assign(window.cells(), 0);
+  if (width_ == 0) return e;
+  // Only the part of the window that overlaps the grid is read; the rest stays unknown.
+  const int64_t ix_lo = std::max(window.ix0, min_ix_);
+  const int64_t iy_lo = std::max(window.iy0, min_iy_);
+  const int64_t ix_hi = std::min(window.ix0 + static_cast<int64_t>(window.width), min_ix_ + width_);
+  const int64_t iy_hi =
+      std::min(window.iy0 + static_cast<int64_t>(window.height), min_iy_ + height_);
+  for (int64_t iy = iy_lo; iy < iy_hi; ++iy) {
+    const size_t row = static_cast<size_t>(iy - window.iy0) * window.width;
+    for (int64_t ix = ix_lo; ix < ix_hi; ++ix) {
+      const size_t i = row + static_cast<size_t>(ix - window.ix0);
+      PutCell(cell_at(ix, iy), unknown_below, &e.occupancy[i], &e.confidence[i]);
+    }
+  }
+  return e;
+}
+
+GridExport LayeredGrid::ExportWindow(const CellWindow& window, std::optional<int> layer,
+                                     double unknown_below) const {
+  if (!layer) return ExportBelowWindow(window, layer_count(), unknown_below);
+  CheckLayer(*layer);
+  GridExport e = ExportCellsIn(
+      window, [&](int64_t ix, int64_t iy) { return At(*layer, ix, iy); }, unknown_below);
+  e.combined = false;
+  e.layer = static_cast<uint32_t>(*layer);
+  return e;
+}
+
+GridExport LayeredGrid::ExportBelowWindow(const CellWindow& window, int first_layers,
+                                          double unknown_below) const {
+  CheckFirstLayers(first_layers);
+  GridExport e = ExportCellsIn(
+      window, [&](int64_t ix, int64_t iy) { return CombineLowest(ix, iy, first_layers); },
+      unknown_below);
+  e.combined = true;
+  e.combined_layers = static_cast<uint32_t>(first_layers);
   return e;
 }
 

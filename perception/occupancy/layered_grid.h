@@ -95,6 +95,21 @@ struct GridExport {
   static constexpr uint8_t kUnknown = 255;
 };
 
+// A window of the grid's lattice (lattice cell (ix, iy) spans [ix, ix + 1) x [iy, iy + 1) times
+// the resolution, anchored at the world origin): cells ix0 .. ix0 + width - 1 along x and
+// iy0 .. iy0 + height - 1 along y. What a local planner asks for: the map around the robot.
+struct CellWindow {
+  int64_t ix0 = 0, iy0 = 0;
+  uint32_t width = 0, height = 0;
+  size_t cells() const { return static_cast<size_t>(width) * height; }
+};
+
+// The window of every cell that the world box [min_x, max_x] x [min_y, max_y] (m) overlaps on
+// a lattice of resolution_m. Throws std::invalid_argument for a box that is not finite, not
+// min < max on both axes, or wider than max_cells_per_side cells along an axis.
+CellWindow WindowOverBox(double resolution_m, double min_x, double min_y, double max_x,
+                         double max_y, int64_t max_cells_per_side = 1 << 20);
+
 class LayeredGrid {
  public:
   explicit LayeredGrid(const GridParams& params = {});
@@ -158,6 +173,12 @@ class LayeredGrid {
   // Export of the combined map over the lowest `first_layers` layers (see Combined); throws
   // std::out_of_range unless 0 < first_layers <= layer_count().
   GridExport ExportBelow(int first_layers, double unknown_below = 0.05) const;
+  // The same two, of exactly `window` (not cropped: cells outside the grid are unknown). Costs
+  // the window's cells, not the grid's.
+  GridExport ExportWindow(const CellWindow& window, std::optional<int> layer = std::nullopt,
+                          double unknown_below = 0.05) const;
+  GridExport ExportBelowWindow(const CellWindow& window, int first_layers,
+                               double unknown_below = 0.05) const;
 
   // Weighted averaging of a registered local map into this one (paper 002, Sec. 4, as [16]):
   // each cell's memberships become the confidence-weighted mean of the two, its confidence the
@@ -189,6 +210,10 @@ class LayeredGrid {
   // The export of whatever cell(ix, iy) gives, cropped to its known cells plus one.
   template <typename CellAt>
   GridExport ExportCells(const CellAt& cell_at, double unknown_below) const;
+  // The same over exactly `window`.
+  template <typename CellAt>
+  GridExport ExportCellsIn(const CellWindow& window, const CellAt& cell_at,
+                           double unknown_below) const;
 
   GridParams params_;
   std::vector<Layer> layers_;

@@ -2,8 +2,8 @@
 // from the newest snapshot's maps (services/mapping/pipeline/pipeline_maps.cc). Errors:
 // FAILED_PRECONDITION when the service is not in mobile-base mode or no key frame has made a
 // map yet, INVALID_ARGUMENT for a layer the grid does not have, a max_height_m below its lowest
-// band, or both at once, DEADLINE_EXCEEDED when no maps newer than newer_than_ns came within
-// wait_ms.
+// band, or both at once, a grid window that is no box or larger than the message limit,
+// DEADLINE_EXCEEDED when no maps newer than newer_than_ns came within wait_ms.
 
 #include <algorithm>
 #include <cmath>
@@ -127,10 +127,73 @@ grpc::Status MapServiceImpl::GetOccupancyGrid(grpc::ServerContext* context,
             "give a layer or max_height_m, not both (a layer is one band; max_height_m combines "
             "the bands a robot that tall can hit)"};
   }
+  if (request->has_region() && request->has_around_robot_m()) {
+    return {grpc::StatusCode::INVALID_ARGUMENT,
+            "give a region or around_robot_m, not both (a region is a box in the world frame; "
+            "around_robot_m a square centred on the robot)"};
+  }
+  if (request->has_around_robot_m() &&
+      !(request->around_robot_m() > 0 && std::isfinite(request->around_robot_m()))) {
+    return {grpc::StatusCode::INVALID_ARGUMENT,
+            fmt::format("around_robot_m {} must be a positive number of metres (the side of "
+                        "the square around the robot)",
+                        request->around_robot_m())};
+  }
+  if (request->has_region()) {
+    // What needs no map is checked before waiting for one.
+    const auto& b = request->region();
+    if (!std::isfinite(b.min_x()) || !std::isfinite(b.min_y()) || !std::isfinite(b.max_x()) ||
+        !std::isfinite(b.max_y()) || !(b.min_x() < b.max_x()) || !(b.min_y() < b.max_y())) {
+      return {grpc::StatusCode::INVALID_ARGUMENT,
+              fmt::format("region [{}, {}] x [{}, {}] m must be finite with min_x < max_x and "
+                          "min_y < max_y",
+                          b.min_x(), b.max_x(), b.min_y(), b.max_y())};
+    }
+  }
   std::shared_ptr<const mobile_mapping::MapsSnapshot> maps;
   if (auto status = LatestMaps(context, request->newer_than_ns(), request->wait_ms(), &maps);
       !status.ok()) {
     return status;
+  }
+  // The window, when one is asked for: checked against the message limit before any cell is
+  // made (2 bytes a cell, and room for the rest of the message).
+  std::optional<occupancy::CellWindow> window;
+  if (request->has_region() || request->has_around_robot_m()) {
+    double min_x = 0, min_y = 0, max_x = 0, max_y = 0;
+    if (request->has_region()) {
+      const auto& b = request->region();
+      min_x = b.min_x();
+      min_y = b.min_y();
+      max_x = b.max_x();
+      max_y = b.max_y();
+    } else {
+      if (maps->poses.empty()) {
+        return {grpc::StatusCode::FAILED_PRECONDITION,
+                "no pose yet to centre the window on (no key frame has been accepted)"};
+      }
+      const Eigen::Vector2d at = maps->poses.back().T_world_base.translation();
+      const double half = request->around_robot_m() / 2;
+      min_x = at.x() - half;
+      min_y = at.y() - half;
+      max_x = at.x() + half;
+      max_y = at.y() + half;
+    }
+    try {
+      window = occupancy::WindowOverBox(maps->grid.resolution(), min_x, min_y, max_x, max_y);
+    } catch (const std::invalid_argument& e) {
+      return {
+          grpc::StatusCode::INVALID_ARGUMENT,
+          fmt::format("region [{}, {}] x [{}, {}] m: {}", min_x, max_x, min_y, max_y, e.what())};
+    }
+    const size_t max_cells =
+        ((static_cast<size_t>(service_.config().max_message_mb) << 20) - (64U << 10)) / 2;
+    if (window->cells() > max_cells) {
+      return {grpc::StatusCode::INVALID_ARGUMENT,
+              fmt::format("the window is {} x {} cells of {} m; api.max_message_mb {} allows {} "
+                          "cells (2 bytes each): ask for a smaller one",
+                          window->width, window->height, maps->grid.resolution(),
+                          service_.config().max_message_mb, max_cells)};
+    }
   }
   const int layers = maps->grid.layer_count();
   std::optional<int> layer;
@@ -155,8 +218,10 @@ grpc::Status MapServiceImpl::GetOccupancyGrid(grpc::ServerContext* context,
     }
   }
   const occupancy::GridExport g =
-      layer ? maps->grid.Export(layer) : maps->grid.ExportBelow(first_layers);
-  if (g.width == 0 || g.height == 0) {
+      window ? (layer ? maps->grid.ExportWindow(*window, layer)
+                      : maps->grid.ExportBelowWindow(*window, first_layers))
+             : (layer ? maps->grid.Export(layer) : maps->grid.ExportBelow(first_layers));
+  if (window ? maps->grid.empty() : g.width == 0 || g.height == 0) {
     // A stop's points join the grid once the stop would make a view (provisionally while the
     // base stands, for good when it moves on); an empty map is no map.
     return {grpc::StatusCode::FAILED_PRECONDITION,
@@ -178,6 +243,7 @@ grpc::Status MapServiceImpl::GetOccupancyGrid(grpc::ServerContext* context,
   out->set_combined(g.combined);
   out->set_layer(g.layer);
   out->set_combined_layers(g.combined_layers);
+  out->set_window(window.has_value());
   out->set_occupancy(g.occupancy.data(), g.occupancy.size());
   out->set_confidence(g.confidence.data(), g.confidence.size());
   return grpc::Status::OK;

@@ -968,6 +968,152 @@ TEST_F(MapsFromPublishedFrames, SavedMapsOfAnotherCameraAreNotResumed) {
   EXPECT_EQ(map_status(&map).error_code(), grpc::StatusCode::FAILED_PRECONDITION);
 }
 
+// A local planner polls a window of the grid around the robot instead of the whole floor: the
+// cells are the whole map's, on its lattice, unknown beyond what the map has seen; a window that
+// is no box, or larger than a message may be, is refused by name and the service goes on.
+TEST_F(MapsFromPublishedFrames, ALocalPlannerGetsAWindowOfTheGrid) {
+  ASSERT_NO_FATAL_FAILURE(Start("maps-window", 69));
+  for (int i = 0; i < 5; ++i) pub_->Frame(Stamp(i), 0.3 * i, 0.0, false);  // a key frame each
+  WaitForKeyFrames(5);
+  auto& stub = epmapd_->stub();
+  const auto get = [&](const v1::GetOccupancyGridRequest& request, v1::OccupancyGrid* grid) {
+    grpc::ClientContext context;
+    return stub.GetOccupancyGrid(&context, request, grid);
+  };
+  v1::GetOccupancyGridRequest whole_request;
+  whole_request.set_newer_than_ns(Stamp(4) - 1);  // the fifth key frame's maps
+  whole_request.set_wait_ms(10000);
+  v1::OccupancyGrid whole;
+  ASSERT_TRUE(get(whole_request, &whole).ok());
+  ASSERT_FALSE(whole.window());
+  const double res = whole.resolution_m();
+  // Every cell of `window` equals the whole map's cell at the same place, or is unknown (255,
+  // confidence 0) where the whole map has none; returns how many lie in the whole map.
+  const auto check_cells = [&](const v1::OccupancyGrid& window) {
+    EXPECT_TRUE(window.window());
+    EXPECT_EQ(window.stamp_ns(), whole.stamp_ns());
+    EXPECT_EQ(window.occupancy().size(), static_cast<size_t>(window.width()) * window.height());
+    EXPECT_EQ(window.confidence().size(), window.occupancy().size());
+    const long dc = std::lround((window.origin().x() - whole.origin().x()) / res);
+    const long dr = std::lround((window.origin().y() - whole.origin().y()) / res);
+    int inside = 0, mismatched = 0;
+    for (long r = 0; r < static_cast<long>(window.height()); ++r) {
+      for (long c = 0; c < static_cast<long>(window.width()); ++c) {
+        const size_t i = static_cast<size_t>(r * window.width() + c);
+        const long wc = c + dc, wr = r + dr;
+        uint8_t occupancy = 255, confidence = 0;
+        if (wc >= 0 && wr >= 0 && wc < static_cast<long>(whole.width()) &&
+            wr < static_cast<long>(whole.height())) {
+          const size_t j = static_cast<size_t>(wr * whole.width() + wc);
+          occupancy = static_cast<uint8_t>(whole.occupancy()[j]);
+          confidence = static_cast<uint8_t>(whole.confidence()[j]);
+          ++inside;
+        }
+        mismatched += static_cast<uint8_t>(window.occupancy()[i]) != occupancy ||
+                      static_cast<uint8_t>(window.confidence()[i]) != confidence;
+      }
+    }
+    EXPECT_EQ(mismatched, 0);
+    return inside;
+  };
+
+  // A box in the world frame: 3 m x 2 m from (-0.5, -1.0), 30 x 20 cells of 0.1 m.
+  v1::GetOccupancyGridRequest box;
+  box.mutable_region()->set_min_x(-0.5);
+  box.mutable_region()->set_min_y(-1.0);
+  box.mutable_region()->set_max_x(2.5);
+  box.mutable_region()->set_max_y(1.0);
+  v1::OccupancyGrid window;
+  ASSERT_TRUE(get(box, &window).ok());
+  EXPECT_NEAR(window.origin().x(), -0.5, 1e-9);
+  EXPECT_NEAR(window.origin().y(), -1.0, 1e-9);
+  EXPECT_EQ(window.width(), 30u);
+  EXPECT_EQ(window.height(), 20u);
+  EXPECT_GT(check_cells(window), 0);
+  EXPECT_TRUE(std::any_of(window.occupancy().begin(), window.occupancy().end(), [](char v) {
+    return static_cast<uint8_t>(v) != 255;
+  })) << "the robot drove through this box: it has known cells";
+  // Far from anything the robot saw: the size asked for, all unknown.
+  v1::GetOccupancyGridRequest far = box;
+  far.mutable_region()->set_min_x(500);
+  far.mutable_region()->set_max_x(501);
+  ASSERT_TRUE(get(far, &window).ok());
+  EXPECT_EQ(window.width(), 10u);
+  EXPECT_EQ(check_cells(window), 0);
+  EXPECT_TRUE(std::all_of(window.occupancy().begin(), window.occupancy().end(),
+                          [](char v) { return static_cast<uint8_t>(v) == 255; }));
+
+  // A square around the robot (its corrected pose at the same key frame), and one band only.
+  v1::PoseEstimate pose;
+  {
+    grpc::ClientContext context;
+    ASSERT_TRUE(stub.GetPose(&context, {}, &pose).ok());
+  }
+  v1::GetOccupancyGridRequest around;
+  around.set_around_robot_m(4.0);
+  around.set_layer(1);
+  ASSERT_TRUE(get(around, &window).ok());
+  EXPECT_FALSE(window.combined());
+  EXPECT_EQ(window.layer(), 1u);
+  EXPECT_NEAR(window.origin().x(), std::floor((pose.corrected().x() - 2.0) / res) * res, 1e-9);
+  EXPECT_NEAR(window.origin().y(), std::floor((pose.corrected().y() - 2.0) / res) * res, 1e-9);
+  EXPECT_GE(window.width(), 40u);
+  EXPECT_LE(window.width(), 41u);
+  {
+    v1::GetOccupancyGridRequest layer1 = whole_request;
+    layer1.set_layer(1);
+    ASSERT_TRUE(get(layer1, &whole).ok());  // compared with band 1 of the whole map
+    EXPECT_GT(check_cells(window), 0);
+  }
+
+  // epmapctl writes the window for map_server, its origin in the YAML.
+  const auto pgm = work_ / "window.pgm";
+  const auto [code, out] =
+      Ctl(*epmapd_, work_, {"grid", "--out", pgm.string(), "--region", "-0.5,-1,2.5,1"});
+  ASSERT_EQ(code, 0) << out;
+  EXPECT_NE(out.find("30x20 cells of 0.100 m (the window asked for)"), std::string::npos) << out;
+  EXPECT_NE(ReadText(work_ / "window.yaml").find("origin: [-0.500000, -1.000000, 0.0]"),
+            std::string::npos);
+  const auto [bad_code, bad_out] =
+      Ctl(*epmapd_, work_, {"grid", "--out", pgm.string(), "--region", "0,0,1"});
+  EXPECT_NE(bad_code, 0) << bad_out;
+
+  // Bad windows: INVALID_ARGUMENT, saying what is wrong.
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const auto refused = [&](const v1::GetOccupancyGridRequest& request, const std::string& says) {
+    v1::OccupancyGrid unused;
+    const auto status = get(request, &unused);
+    EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << request.DebugString();
+    EXPECT_NE(status.error_message().find(says), std::string::npos) << status.error_message();
+  };
+  v1::GetOccupancyGridRequest inverted = box;
+  inverted.mutable_region()->set_max_x(-2.0);
+  refused(inverted, "min_x < max_x");
+  v1::GetOccupancyGridRequest not_a_number = box;
+  not_a_number.mutable_region()->set_min_y(nan);
+  refused(not_a_number, "must be finite");
+  v1::GetOccupancyGridRequest both = box;
+  both.set_around_robot_m(3.0);
+  refused(both, "not both");
+  for (const double side : {0.0, -1.0, nan}) {
+    v1::GetOccupancyGridRequest bad_side;
+    bad_side.set_around_robot_m(side);
+    refused(bad_side, "positive number of metres");
+  }
+  v1::GetOccupancyGridRequest huge;  // 1 km square at 0.1 m: 10^8 cells, over 64 MB
+  huge.set_around_robot_m(1000.0);
+  refused(huge, "api.max_message_mb 64 allows");
+  v1::GetOccupancyGridRequest absurd = box;  // more cells along x than an index can hold
+  absurd.mutable_region()->set_max_x(1e300);
+  refused(absurd, "cells along an axis");
+
+  // The service goes on: the whole map as before.
+  v1::OccupancyGrid again;
+  ASSERT_TRUE(get({}, &again).ok());
+  EXPECT_FALSE(again.window());
+  EXPECT_GT(again.width(), 0u);
+}
+
 // A planner that has the maps waits for the next ones instead of polling: the call returns when
 // a key frame brings newer maps, DEADLINE_EXCEEDED when none comes in time.
 TEST_F(MapsFromPublishedFrames, APlannerWaitsForTheNextKeyFramesMaps) {
