@@ -454,6 +454,61 @@ void WriteText(const fs::path& path, const std::string& text) {
   out << text;
 }
 
+// What a local planner polls (GetOccupancyGrid with around_robot_m): the square of side_m
+// around the final corrected pose, against the whole grid's export (the baseline) on the same
+// snapshot, each `repeat` times. Throws if a window cell differs from the whole grid's.
+std::string GridWindowJson(const epmap::mobile_mapping::MapsSnapshot& maps, double side_m,
+                           int repeat) {
+  if (maps.poses.empty()) return "null";  // no key frame: no robot to centre on
+  const auto& grid = maps.grid;
+  const Eigen::Vector2d at = maps.poses.back().T_world_base.translation();
+  const auto window =
+      epmap::occupancy::WindowOverBox(grid.resolution(), at.x() - side_m / 2, at.y() - side_m / 2,
+                                      at.x() + side_m / 2, at.y() + side_m / 2);
+  std::vector<double> window_ms, whole_ms;
+  epmap::occupancy::GridExport part, whole;
+  for (int k = 0; k < repeat; ++k) {
+    auto t0 = std::chrono::steady_clock::now();
+    whole = grid.Export();
+    whole_ms.push_back(MsSince(t0));
+    t0 = std::chrono::steady_clock::now();
+    part = grid.ExportWindow(window);
+    window_ms.push_back(MsSince(t0));
+  }
+  // The window's cells are the whole grid's, or unknown where it has none.
+  const double res = grid.resolution();
+  const long dc = std::lround((part.origin_x - whole.origin_x) / res);
+  const long dr = std::lround((part.origin_y - whole.origin_y) / res);
+  size_t differ = 0;
+  for (long r = 0; r < static_cast<long>(part.height); ++r) {
+    for (long c = 0; c < static_cast<long>(part.width); ++c) {
+      const long wc = c + dc, wr = r + dr;
+      const bool in = wc >= 0 && wr >= 0 && wc < static_cast<long>(whole.width) &&
+                      wr < static_cast<long>(whole.height);
+      const size_t i = static_cast<size_t>(r) * part.width + static_cast<size_t>(c);
+      const uint8_t expected =
+          in ? whole.occupancy[static_cast<size_t>(wr) * whole.width + static_cast<size_t>(wc)]
+             : epmap::occupancy::GridExport::kUnknown;
+      differ += part.occupancy[i] != expected;
+    }
+  }
+  if (differ > 0) {
+    throw std::runtime_error("grid window: " + std::to_string(differ) +
+                             " cells differ from the whole grid's");
+  }
+  std::ostringstream j;
+  j << "{\"side_m\":" << FormatFixed(side_m, 1) << ",\"cells\":" << part.occupancy.size()
+    << ",\"bytes\":" << 2 * part.occupancy.size()
+    << ",\"ms_median\":" << FormatFixed(Median(window_ms), 3)
+    << ",\"baseline\":\"the whole grid's export (GetOccupancyGrid without a window)\""
+    << ",\"baseline_cells\":" << whole.occupancy.size()
+    << ",\"baseline_bytes\":" << 2 * whole.occupancy.size()
+    << ",\"baseline_ms_median\":" << FormatFixed(Median(whole_ms), 3)
+    << ",\"ratio_to_baseline\":" << FormatFixed(Median(window_ms) / Median(whole_ms), 3)
+    << ",\"repeat\":" << repeat << "}";
+  return j.str();
+}
+
 std::string PmapJson(const epmap::perceptual_map::PerceptualMap& m, const Truth& truth) {
   std::ostringstream s;
   s << "{\"frame\":\"world = the robot's start pose\",\"segments\":[";
@@ -1212,6 +1267,7 @@ int RunCommand(int argc, char** argv) {
       << ",\"target_ms\":100,\"baseline\":\"full-frame SGBM (64 disparities, block 5) on the "
          "same key frames\",\"baseline_sgbm_ms_median\":"
       << FormatFixed(sg, 2) << ",\"ratio_to_baseline\":" << FormatFixed(med / sg, 3) << "}";
+    j << ",\"grid_window\":" << GridWindowJson(maps, 8.0, 20);
     j << ",\"durable_state\":{\"bytes\":" << main.state_bytes
       << ",\"save_ms_median\":" << FormatFixed(Median(main.save_ms), 2)
       << ",\"restore_ms_median\":" << FormatFixed(Median(main.restore_ms), 2)

@@ -34,16 +34,27 @@ TEST(MapsBench, WritesTheMapsAndTheFigures) {
   ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
 
   const std::string figures = Slurp(dir / "figures.txt");
-  for (const char* key :
-       {"\"odometry_final_error_deg\":", "\"corrected_final_error_deg\":",
-        "\"wall_coverage_0p5m\":", "\"visible_wall_share\":", "\"stray_share_1m\":", "\"iou\":",
-        "\"iou_upper_bound\":", "\"wall_coverage_seen_bound\":", "\"seen_wall_coverage_0p5m\":",
-        "\"no_heading_correction\":", "\"per_key_frame_ms_median\":",
-        "\"baseline_sgbm_ms_median\":", "\"correlation\":{\"enabled\":true,\"shifts_applied\":",
-        "\"by_layer\":[{\"from_m\":0.10,\"to_m\":0.70,\"walls\":{\"iou\":",
-        "\"iou_by_unknown_below\":{\"0.05\":{\"iou\":", "\"resolution_m\":0.100,",
-        "\"durable_state\":{\"bytes\":", "\"round_trip_exact\":true",
-        "\"committed_snapshot\":{\"key_frames\":"}) {
+  for (const char* key : {"\"odometry_final_error_deg\":",
+                          "\"corrected_final_error_deg\":",
+                          "\"wall_coverage_0p5m\":",
+                          "\"visible_wall_share\":",
+                          "\"stray_share_1m\":",
+                          "\"iou\":",
+                          "\"iou_upper_bound\":",
+                          "\"wall_coverage_seen_bound\":",
+                          "\"seen_wall_coverage_0p5m\":",
+                          "\"no_heading_correction\":",
+                          "\"per_key_frame_ms_median\":",
+                          "\"baseline_sgbm_ms_median\":",
+                          "\"correlation\":{\"enabled\":true,\"shifts_applied\":",
+                          "\"by_layer\":[{\"from_m\":0.10,\"to_m\":0.70,\"walls\":{\"iou\":",
+                          "\"iou_by_unknown_below\":{\"0.05\":{\"iou\":",
+                          "\"resolution_m\":0.100,",
+                          "\"durable_state\":{\"bytes\":",
+                          "\"round_trip_exact\":true",
+                          "\"committed_snapshot\":{\"key_frames\":",
+                          "\"grid_window\":{\"side_m\":8.0,\"cells\":",
+                          "\"baseline_cells\":"}) {
     EXPECT_NE(figures.find(key), std::string::npos) << key << " missing in " << figures;
   }
   EXPECT_EQ(figures.find("null"), std::string::npos) << figures;
