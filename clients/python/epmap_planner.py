@@ -78,13 +78,17 @@ def free_ahead(grid, pose, max_m=20.0):
     return max_m, "max_range"
 
 
-def grid_summary(stub, pb2, robot_height_m=None):
+def grid_summary(stub, pb2, robot_height_m=None, around_robot_m=None):
     """The corrected pose and the grid (combined over every band, or over the bands a robot
-    robot_height_m tall can hit), or {"unavailable": why} when the service has no maps yet."""
+    robot_height_m tall can hit; the whole map, or the square of side around_robot_m centred on
+    the robot, as a local planner polls it), or {"unavailable": why} when the service has no
+    maps yet."""
     import grpc  # noqa: E402
     request = pb2.GetOccupancyGridRequest()
     if robot_height_m is not None:
         request.max_height_m = robot_height_m
+    if around_robot_m is not None:
+        request.around_robot_m = around_robot_m
     try:
         pose = stub.GetPose(pb2.GetPoseRequest(), timeout=10)
         grid = stub.GetOccupancyGrid(request, timeout=30)
@@ -107,6 +111,7 @@ def grid_summary(stub, pb2, robot_height_m=None):
         "bands_m": [round(grid.layer_bounds_m[0], 3),
                     round(grid.layer_bounds_m[grid.combined_layers], 3)],
         "combined_layers": grid.combined_layers,
+        "window": grid.window,  # around_robot_m: free_ahead ends at its "edge" at the latest
         "known_cells": known,
         "occupied_cells": occupied,
         "pose_corrected": [round(c.x, 3), round(c.y, 3), round(c.theta, 4)],
@@ -125,6 +130,9 @@ def main():
     parser.add_argument("--robot-height", type=float, default=None, metavar="M",
                         help="mobile base: plan on the grid bands a robot this tall can hit "
                              "(default: every band)")
+    parser.add_argument("--around-robot", type=float, default=None, metavar="SIDE_M",
+                        help="mobile base: only the square of the grid this wide around the robot "
+                             "(a local planner's window; default: the whole map)")
     args = parser.parse_args()
 
     import grpc  # noqa: E402
@@ -172,7 +180,7 @@ def main():
     }
     if status.mode == "mobile-base":
         try:
-            result["map"] = grid_summary(stub, pb2, args.robot_height)
+            result["map"] = grid_summary(stub, pb2, args.robot_height, args.around_robot)
         except grpc.RpcError as error:
             print("epmap_planner: %s: %s" % (error.code().name, error.details()), file=sys.stderr)
             return 1

@@ -5,6 +5,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -144,6 +145,21 @@ TEST(PythonClientE2E, PlannerExampleReadsTheGridAheadOfAMobileBase) {
   std::printf("robot 0.5 m tall: free ahead %.2f m (%s)\n", low_free,
               low["free_ahead_ends"].as<std::string>().c_str());
   EXPECT_LE(low_free, to_wall + 0.3) << low_out;
+  // A local planner's window, 4 m around the robot: the service's window, and free ahead as far
+  // as the whole map says or to the window's edge, 2 m ahead (a cell either way).
+  const auto [window_code, window_out] = RunPlanner(epmapd, work, {"--around-robot", "4"});
+  ASSERT_EQ(window_code, 0) << window_out;
+  const YAML::Node window = YAML::Load(window_out)["map"];
+  ASSERT_TRUE(window && window["free_ahead_m"]) << window_out;
+  EXPECT_TRUE(window["window"].as<bool>()) << window_out;
+  EXPECT_FALSE(map["window"].as<bool>()) << out;
+  EXPECT_GE(window["width"].as<uint32_t>(), 40u) << window_out;
+  EXPECT_LE(window["width"].as<uint32_t>(), 41u) << window_out;
+  const double window_free = window["free_ahead_m"].as<double>();
+  std::printf("4 m window around the robot: free ahead %.2f m (%s)\n", window_free,
+              window["free_ahead_ends"].as<std::string>().c_str());
+  EXPECT_LE(window_free, free_ahead + 1e-6) << window_out;
+  EXPECT_GE(window_free, std::min(free_ahead, 1.9)) << window_out;
   const auto [bad_code, bad_out] = RunPlanner(epmapd, work, {"--robot-height", "0.05"});
   EXPECT_NE(bad_code, 0);
   EXPECT_NE(bad_out.find("INVALID_ARGUMENT"), std::string::npos) << bad_out;
