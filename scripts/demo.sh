@@ -139,6 +139,9 @@ snapshot() {
     for f in grid.png grid.pgm; do
       $BIN/epmapctl --server "$SERVER" grid --out "$OUT/$f" > /dev/null 2>&1 || true
     done
+    # What a local planner polls: the 8 m square around the robot.
+    $BIN/epmapctl --server "$SERVER" grid --around-robot 8 --out "$OUT/grid_around_robot.png" \
+      > /dev/null 2>&1 || true
     $BIN/epmapctl --server "$SERVER" pose --json > "$OUT/pose.json" 2> /dev/null || true
   fi
   status
