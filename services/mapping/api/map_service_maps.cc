@@ -29,6 +29,78 @@ void ToProto(const Eigen::Vector2d& p, v1::Point2D* out) {
   out->set_y(p.y());
 }
 
+// A window of the grid (GetOccupancyGridRequest region / around_robot_m): what can be checked
+// before there is a map to look at.
+grpc::Status CheckGridWindowRequest(const v1::GetOccupancyGridRequest& request) {
+  if (request.has_region() && request.has_around_robot_m()) {
+    return {grpc::StatusCode::INVALID_ARGUMENT,
+            "give a region or around_robot_m, not both (a region is a box in the world frame; "
+            "around_robot_m a square centred on the robot)"};
+  }
+  if (request.has_around_robot_m() &&
+      !(request.around_robot_m() > 0 && std::isfinite(request.around_robot_m()))) {
+    return {grpc::StatusCode::INVALID_ARGUMENT,
+            fmt::format("around_robot_m {} must be a positive number of metres (the side of "
+                        "the square around the robot)",
+                        request.around_robot_m())};
+  }
+  if (request.has_region()) {
+    const auto& b = request.region();
+    if (!std::isfinite(b.min_x()) || !std::isfinite(b.min_y()) || !std::isfinite(b.max_x()) ||
+        !std::isfinite(b.max_y()) || !(b.min_x() < b.max_x()) || !(b.min_y() < b.max_y())) {
+      return {grpc::StatusCode::INVALID_ARGUMENT,
+              fmt::format("region [{}, {}] x [{}, {}] m must be finite with min_x < max_x and "
+                          "min_y < max_y",
+                          b.min_x(), b.max_x(), b.min_y(), b.max_y())};
+    }
+  }
+  return grpc::Status::OK;
+}
+
+// The window asked for on these maps' lattice (nullopt: none asked for), refused when it would
+// not fit in a message of max_message_mb (2 bytes a cell, and room for the rest of the message).
+grpc::Status GridWindowOf(const v1::GetOccupancyGridRequest& request,
+                          const mobile_mapping::MapsSnapshot& maps, int max_message_mb,
+                          std::optional<occupancy::CellWindow>* window) {
+  window->reset();
+  if (!request.has_region() && !request.has_around_robot_m()) return grpc::Status::OK;
+  double min_x = 0, min_y = 0, max_x = 0, max_y = 0;
+  if (request.has_region()) {
+    const auto& b = request.region();
+    min_x = b.min_x();
+    min_y = b.min_y();
+    max_x = b.max_x();
+    max_y = b.max_y();
+  } else {
+    if (maps.poses.empty()) {
+      return {grpc::StatusCode::FAILED_PRECONDITION,
+              "no pose yet to centre the window on (no key frame has been accepted)"};
+    }
+    // The corrected pose of the same key frame as the grid: no race with a separate GetPose.
+    const Eigen::Vector2d at = maps.poses.back().T_world_base.translation();
+    const double half = request.around_robot_m() / 2;
+    min_x = at.x() - half;
+    min_y = at.y() - half;
+    max_x = at.x() + half;
+    max_y = at.y() + half;
+  }
+  try {
+    *window = occupancy::WindowOverBox(maps.grid.resolution(), min_x, min_y, max_x, max_y);
+  } catch (const std::invalid_argument& e) {
+    return {grpc::StatusCode::INVALID_ARGUMENT,
+            fmt::format("region [{}, {}] x [{}, {}] m: {}", min_x, max_x, min_y, max_y, e.what())};
+  }
+  const size_t max_cells = ((static_cast<size_t>(max_message_mb) << 20) - (64U << 10)) / 2;
+  if ((*window)->cells() > max_cells) {
+    return {grpc::StatusCode::INVALID_ARGUMENT,
+            fmt::format("the window is {} x {} cells of {} m; api.max_message_mb {} allows {} "
+                        "cells (2 bytes each): ask for a smaller one",
+                        (*window)->width, (*window)->height, maps.grid.resolution(), max_message_mb,
+                        max_cells)};
+  }
+  return grpc::Status::OK;
+}
+
 }  // namespace
 
 grpc::Status MapServiceImpl::LatestMaps(grpc::ServerContext* context, int64_t newer_than_ns,
@@ -127,73 +199,16 @@ grpc::Status MapServiceImpl::GetOccupancyGrid(grpc::ServerContext* context,
             "give a layer or max_height_m, not both (a layer is one band; max_height_m combines "
             "the bands a robot that tall can hit)"};
   }
-  if (request->has_region() && request->has_around_robot_m()) {
-    return {grpc::StatusCode::INVALID_ARGUMENT,
-            "give a region or around_robot_m, not both (a region is a box in the world frame; "
-            "around_robot_m a square centred on the robot)"};
-  }
-  if (request->has_around_robot_m() &&
-      !(request->around_robot_m() > 0 && std::isfinite(request->around_robot_m()))) {
-    return {grpc::StatusCode::INVALID_ARGUMENT,
-            fmt::format("around_robot_m {} must be a positive number of metres (the side of "
-                        "the square around the robot)",
-                        request->around_robot_m())};
-  }
-  if (request->has_region()) {
-    // What needs no map is checked before waiting for one.
-    const auto& b = request->region();
-    if (!std::isfinite(b.min_x()) || !std::isfinite(b.min_y()) || !std::isfinite(b.max_x()) ||
-        !std::isfinite(b.max_y()) || !(b.min_x() < b.max_x()) || !(b.min_y() < b.max_y())) {
-      return {grpc::StatusCode::INVALID_ARGUMENT,
-              fmt::format("region [{}, {}] x [{}, {}] m must be finite with min_x < max_x and "
-                          "min_y < max_y",
-                          b.min_x(), b.max_x(), b.min_y(), b.max_y())};
-    }
-  }
+  if (auto bad = CheckGridWindowRequest(*request); !bad.ok()) return bad;
   std::shared_ptr<const mobile_mapping::MapsSnapshot> maps;
   if (auto status = LatestMaps(context, request->newer_than_ns(), request->wait_ms(), &maps);
       !status.ok()) {
     return status;
   }
-  // The window, when one is asked for: checked against the message limit before any cell is
-  // made (2 bytes a cell, and room for the rest of the message).
   std::optional<occupancy::CellWindow> window;
-  if (request->has_region() || request->has_around_robot_m()) {
-    double min_x = 0, min_y = 0, max_x = 0, max_y = 0;
-    if (request->has_region()) {
-      const auto& b = request->region();
-      min_x = b.min_x();
-      min_y = b.min_y();
-      max_x = b.max_x();
-      max_y = b.max_y();
-    } else {
-      if (maps->poses.empty()) {
-        return {grpc::StatusCode::FAILED_PRECONDITION,
-                "no pose yet to centre the window on (no key frame has been accepted)"};
-      }
-      const Eigen::Vector2d at = maps->poses.back().T_world_base.translation();
-      const double half = request->around_robot_m() / 2;
-      min_x = at.x() - half;
-      min_y = at.y() - half;
-      max_x = at.x() + half;
-      max_y = at.y() + half;
-    }
-    try {
-      window = occupancy::WindowOverBox(maps->grid.resolution(), min_x, min_y, max_x, max_y);
-    } catch (const std::invalid_argument& e) {
-      return {
-          grpc::StatusCode::INVALID_ARGUMENT,
-          fmt::format("region [{}, {}] x [{}, {}] m: {}", min_x, max_x, min_y, max_y, e.what())};
-    }
-    const size_t max_cells =
-        ((static_cast<size_t>(service_.config().max_message_mb) << 20) - (64U << 10)) / 2;
-    if (window->cells() > max_cells) {
-      return {grpc::StatusCode::INVALID_ARGUMENT,
-              fmt::format("the window is {} x {} cells of {} m; api.max_message_mb {} allows {} "
-                          "cells (2 bytes each): ask for a smaller one",
-                          window->width, window->height, maps->grid.resolution(),
-                          service_.config().max_message_mb, max_cells)};
-    }
+  if (auto bad = GridWindowOf(*request, *maps, service_.config().max_message_mb, &window);
+      !bad.ok()) {
+    return bad;
   }
   const int layers = maps->grid.layer_count();
   std::optional<int> layer;
