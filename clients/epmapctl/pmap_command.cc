@@ -1,8 +1,9 @@
-// epmapctl pmap --out map.svg|map.json: the perceptual map of a mobile base (issue 6).
+// epmapctl pmap --out map.svg|map.json [--kept-only]: the perceptual map of a mobile base
+// (issue 6), or only the segments paper 003's redundancy removal keeps (III-D, its Fig. 10).
 // .json in the layout `epmap-bench maps` writes (metres, world frame = the robot's start
-// pose): {"stamp_ns","includes_open_stop","resumed_unconfirmed","segments":[{"id","x1","y1",
-// "x2","y2","view_id","observations"}],"path":[[x,y]],"boundary":[[x,y]],
-// "inner_boundary":[[x,y]],"views":[...]}; .svg a picture for people.
+// pose): {"stamp_ns","includes_open_stop","resumed_unconfirmed","segments_in_map",
+// "segments":[{"id","x1","y1","x2","y2","view_id","observations","kept"}],"path":[[x,y]],
+// "boundary":[[x,y]],"inner_boundary":[[x,y]],"views":[...]}; .svg a picture for people.
 
 #include <algorithm>
 #include <cstdio>
@@ -38,12 +39,13 @@ std::string Json(const epmap::v1::PerceptualMap& m) {
   s << "{\"stamp_ns\":" << m.stamp_ns()
     << ",\"includes_open_stop\":" << (m.includes_open_stop() ? "true" : "false")
     << ",\"resumed_unconfirmed\":" << (m.resumed_unconfirmed() ? "true" : "false")
-    << ",\"segments\":[";
+    << ",\"segments_in_map\":" << m.segments_in_map() << ",\"segments\":[";
   for (int i = 0; i < m.segments_size(); ++i) {
     const auto& g = m.segments(i);
     s << (i ? "," : "") << "{\"id\":" << g.id() << ",\"x1\":" << Num(g.x1())
       << ",\"y1\":" << Num(g.y1()) << ",\"x2\":" << Num(g.x2()) << ",\"y2\":" << Num(g.y2())
-      << ",\"view_id\":" << g.view_id() << ",\"observations\":" << g.observations() << "}";
+      << ",\"view_id\":" << g.view_id() << ",\"observations\":" << g.observations()
+      << ",\"kept\":" << (g.kept() ? "true" : "false") << "}";
   }
   s << "],\"path\":" << Points(m.path()) << ",\"boundary\":" << Points(m.boundary())
     << ",\"inner_boundary\":" << Points(m.inner_boundary()) << ",\"views\":[";
@@ -57,7 +59,8 @@ std::string Json(const epmap::v1::PerceptualMap& m) {
   return s.str();
 }
 
-// Segments dark red, path blue, outer boundary green, inner boundary orange; y up, 50 px/m.
+// Segments dark red (pale and thin where the redundancy removal drops them), path blue, outer
+// boundary green, inner boundary orange; y up, 50 px/m.
 std::string Svg(const epmap::v1::PerceptualMap& m) {
   double x0 = std::numeric_limits<double>::infinity(), y0 = x0, x1 = -x0, y1 = -x0;
   const auto grow = [&](double x, double y) {
@@ -88,16 +91,21 @@ std::string Svg(const epmap::v1::PerceptualMap& m) {
   polyline(m.boundary(), "green");
   polyline(m.inner_boundary(), "orange");
   polyline(m.path(), "blue");
-  for (const auto& g : m.segments()) {
-    s << "<line x1=\"" << X(g.x1()) << "\" y1=\"" << Y(g.y1()) << "\" x2=\"" << X(g.x2())
-      << "\" y2=\"" << Y(g.y2()) << "\" stroke=\"darkred\" stroke-width=\"2\"><title>id " << g.id()
-      << "</title></line>\n";
+  // The dropped ones first: the kept ones are drawn over them.
+  for (const bool kept : {false, true}) {
+    for (const auto& g : m.segments()) {
+      if (g.kept() != kept) continue;
+      s << "<line x1=\"" << X(g.x1()) << "\" y1=\"" << Y(g.y1()) << "\" x2=\"" << X(g.x2())
+        << "\" y2=\"" << Y(g.y2()) << "\" stroke=\"" << (kept ? "darkred" : "#e0a8a8")
+        << "\" stroke-width=\"" << (kept ? 2 : 1) << "\"><title>id " << g.id()
+        << (kept ? "" : " (redundant)") << "</title></line>\n";
+    }
   }
   s << "</svg>\n";
   return s.str();
 }
 
-int Run(const ClientOptions& options, const std::string& out_path,
+int Run(const ClientOptions& options, const std::string& out_path, bool kept_only,
         const epmap::ctl::MapsWait& wait) {
   const std::string ext = std::filesystem::path(out_path).extension().string();
   if (ext != ".svg" && ext != ".json") {
@@ -108,6 +116,7 @@ int Run(const ClientOptions& options, const std::string& out_path,
   epmap::v1::PerceptualMap map;
   epmap::v1::GetPerceptualMapRequest request;
   wait.Apply(&request);
+  request.set_kept_only(kept_only);
   const auto context = options.Context(wait.wait_ms);
   const grpc::Status rpc = stub->GetPerceptualMap(context.get(), request, &map);
   if (!rpc.ok()) return options.Fail(rpc);
@@ -117,11 +126,15 @@ int Run(const ClientOptions& options, const std::string& out_path,
     std::cerr << "epmapctl: cannot write " << out_path << "\n";
     return 1;
   }
-  std::printf("wrote %s: %d segments, %d views, path of %d points (stamp %lld ns)%s%s\n",
-              out_path.c_str(), map.segments_size(), map.views_size(), map.path_size(),
-              static_cast<long long>(map.stamp_ns()),
-              map.includes_open_stop() ? ", with the stop under way (provisional)" : "",
-              map.resumed_unconfirmed() ? epmap::ctl::kResumedNote : "");
+  const auto kept = std::count_if(map.segments().begin(), map.segments().end(),
+                                  [](const epmap::v1::MapSegment& g) { return g.kept(); });
+  std::printf(
+      "wrote %s: %d segments of %u (%ld kept by the redundancy removal), %d views, path "
+      "of %d points (stamp %lld ns)%s%s\n",
+      out_path.c_str(), map.segments_size(), map.segments_in_map(), static_cast<long>(kept),
+      map.views_size(), map.path_size(), static_cast<long long>(map.stamp_ns()),
+      map.includes_open_stop() ? ", with the stop under way (provisional)" : "",
+      map.resumed_unconfirmed() ? epmap::ctl::kResumedNote : "");
   return 0;
 }
 
@@ -130,9 +143,14 @@ void Setup(CLI::App& app, ClientOptions& options) {
   auto out = std::make_shared<std::string>();
   cmd->add_option("--out", *out, "FILE.svg (picture) or FILE.json (metres, world frame)")
       ->required();
+  auto kept_only = std::make_shared<bool>(false);
+  cmd->add_flag("--kept-only", *kept_only,
+                "only the segments the redundancy removal keeps (paper 003 III-D, its Fig. 10)");
   auto wait = std::make_shared<epmap::ctl::MapsWait>();
   wait->AddOptions(cmd);
-  cmd->callback([&options, out, wait] { options.exit_code = Run(options, *out, *wait); });
+  cmd->callback([&options, out, kept_only, wait] {
+    options.exit_code = Run(options, *out, *kept_only, *wait);
+  });
 }
 
 }  // namespace

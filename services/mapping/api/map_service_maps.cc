@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <unordered_set>
 
 #include <spdlog/fmt/fmt.h>
 
@@ -165,8 +166,14 @@ grpc::Status MapServiceImpl::GetPerceptualMap(grpc::ServerContext* context,
   out->set_stamp_ns(maps->stamp_ns);
   out->set_includes_open_stop(maps->includes_open_stop);
   out->set_resumed_unconfirmed(maps->resumed_unconfirmed);
+  out->set_segments_in_map(static_cast<uint32_t>(m.segments.size()));
+  std::unordered_set<uint32_t> kept;  // paper 003 III-D's redundancy removal
+  for (const auto& s : m.kept_segments) kept.insert(s.id);
   for (const auto& s : m.segments) {
+    const bool is_kept = kept.count(s.id) > 0;
+    if (request->kept_only() && !is_kept) continue;
     auto* seg = out->add_segments();
+    seg->set_kept(is_kept);
     seg->set_id(s.id);
     seg->set_x1(s.a.x());
     seg->set_y1(s.a.y());

@@ -28,6 +28,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <optional>
+#include <set>
 #include <sstream>
 #include <thread>
 
@@ -157,6 +158,29 @@ TEST(MapsE2E, BuildingRunGivesMapsNearTheTrueWalls) {
     std::printf("perceptual map: %zu segments, %.0f%% of their length within 1 m of a wall\n",
                 segments.size(), 100 * near_walls);
     EXPECT_GE(near_walls, 0.6);
+    // Paper 003's redundancy removal (III-D): each segment says whether it keeps it, and
+    // --kept-only serves just those (the clean map of its Fig. 10), the same ones.
+    std::set<uint32_t> kept_ids;
+    for (const auto& s : map["segments"]) {
+      if (s["kept"].as<bool>()) kept_ids.insert(s["id"].as<uint32_t>());
+    }
+    EXPECT_EQ(map["segments_in_map"].as<size_t>(), segments.size());
+    EXPECT_GT(kept_ids.size(), 0u);
+    EXPECT_LT(kept_ids.size(), segments.size());
+    const auto [kept_code, kept_out] =
+        Ctl(epmapd, work, {"pmap", "--kept-only", "--out", (work / "kept.json").string()});
+    ASSERT_EQ(kept_code, 0) << kept_out;
+    const YAML::Node kept = YAML::Load(ReadText(work / "kept.json"));
+    std::set<uint32_t> served_ids;
+    for (const auto& s : kept["segments"]) {
+      EXPECT_TRUE(s["kept"].as<bool>());
+      served_ids.insert(s["id"].as<uint32_t>());
+    }
+    if (kept["stamp_ns"].as<int64_t>() == map["stamp_ns"].as<int64_t>()) {  // the same maps
+      EXPECT_EQ(served_ids, kept_ids);
+      EXPECT_EQ(kept["segments_in_map"].as<size_t>(), segments.size());
+    }
+    std::printf("redundancy removal keeps %zu of %zu segments\n", kept_ids.size(), segments.size());
     const auto [svg_code, svg_out] =
         Ctl(epmapd, work, {"pmap", "--out", (work / "map.svg").string()});
     ASSERT_EQ(svg_code, 0) << svg_out;
