@@ -20,6 +20,9 @@ struct Style {
 constexpr Style kSegments{"segments", kMarkerLineList, 0.05, 0.15F, 0.35F, 0.9F};
 constexpr Style kPath{"path", kMarkerLineStrip, 0.03, 0.1F, 0.65F, 0.2F};
 constexpr Style kBoundary{"boundary", kMarkerLineStrip, 0.03, 1.0F, 0.5F, 0.0F};
+// The segments paper 003's redundancy removal keeps (III-D), drawn wider over the others: RViz
+// can show this namespace alone for the clean map of the paper's Fig. 10.
+constexpr Style kKeptSegments{"kept_segments", kMarkerLineList, 0.08, 0.6F, 0.05F, 0.05F};
 
 visualization_msgs::msg::Marker Lines(const Style& style, int32_t id, int64_t stamp_ns,
                                       const std::string& frame,
@@ -74,6 +77,13 @@ void ToRosMarkers(const perceptual_map::PerceptualMap& map, int64_t stamp_ns,
   if (map.boundary.inner.size() >= 2) {
     markers.push_back(Lines(kBoundary, 1, stamp_ns, frame, map.boundary.inner));
   }
+  std::vector<Eigen::Vector2d> kept;
+  kept.reserve(2 * map.kept_segments.size());
+  for (const auto& s : map.kept_segments) {
+    kept.push_back(s.a);
+    kept.push_back(s.b);
+  }
+  if (!kept.empty()) markers.push_back(Lines(kKeptSegments, 0, stamp_ns, frame, kept));
 }
 
 }  // namespace epmap::mapping

@@ -382,6 +382,13 @@ TEST(MapsE2E, BuildingRunGivesMapsNearTheTrueWalls) {
                         std::abs(b.x() - s.x2()), std::abs(b.y() - s.y2())});
     }
     EXPECT_LT(worst, 1e-9);
+    // The kept ones again, as GetPerceptualMap marks them.
+    const auto* kept_lines = find("kept_segments");
+    ASSERT_NE(kept_lines, nullptr);
+    const auto kept = std::count_if(pmap.segments().begin(), pmap.segments().end(),
+                                    [](const v1::MapSegment& s) { return s.kept(); });
+    EXPECT_GT(kept, 0);
+    EXPECT_EQ(kept_lines->points().size(), 2u * static_cast<size_t>(kept));
     const auto* path = find("path");
     ASSERT_NE(path, nullptr);
     EXPECT_EQ(path->points().size(), static_cast<size_t>(pmap.path_size()));

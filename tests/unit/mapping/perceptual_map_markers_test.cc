@@ -57,6 +57,23 @@ TEST(PerceptualMapMarkers, SegmentsPathAndBoundaryAreLinesOnTheFloorAfterADelete
   ASSERT_EQ(empty.markers().size(), 1u) << "an empty map only clears what RViz drew";
 }
 
+// The segments the redundancy removal keeps (paper 003 III-D) come last, in a namespace of
+// their own that RViz can show alone.
+TEST(PerceptualMapMarkers, TheKeptSegmentsAreANamespaceOfTheirOwn) {
+  auto map = SmallMap();
+  map.kept_segments = {map.segments[1]};
+  visualization_msgs::msg::MarkerArray msg;
+  ToRosMarkers(map, 1'500'000'000, "map", &msg);
+  ASSERT_EQ(msg.markers().size(), 5u);
+  const auto& kept = msg.markers()[4];
+  EXPECT_EQ(kept.ns(), "kept_segments");
+  EXPECT_EQ(kept.type(), kMarkerLineList);
+  ASSERT_EQ(kept.points().size(), 2u);
+  EXPECT_DOUBLE_EQ(kept.points()[0].x(), -1.5);
+  EXPECT_DOUBLE_EQ(kept.points()[1].y(), 4.0);
+  EXPECT_GT(kept.scale().x(), msg.markers()[1].scale().x()) << "drawn over the others";
+}
+
 TEST(PerceptualMapMarkers, TheMessageGoesThroughCdrUnchanged) {
   visualization_msgs::msg::MarkerArray msg;
   ToRosMarkers(SmallMap(), 42, "robot1_map", &msg);
