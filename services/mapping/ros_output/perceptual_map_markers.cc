@@ -50,6 +50,17 @@ visualization_msgs::msg::Marker Lines(const Style& style, int32_t id, int64_t st
   return m;
 }
 
+// Both ends of every segment, in order: a LINE_LIST's points.
+std::vector<Eigen::Vector2d> Ends(const std::vector<perceptual_map::MapSegment>& segments) {
+  std::vector<Eigen::Vector2d> ends;
+  ends.reserve(2 * segments.size());
+  for (const auto& s : segments) {
+    ends.push_back(s.a);
+    ends.push_back(s.b);
+  }
+  return ends;
+}
+
 }  // namespace
 
 void ToRosMarkers(const perceptual_map::PerceptualMap& map, int64_t stamp_ns,
@@ -62,14 +73,10 @@ void ToRosMarkers(const perceptual_map::PerceptualMap& map, int64_t stamp_ns,
   clear.action(kMarkerDeleteAll);
   markers.push_back(clear);
 
-  std::vector<Eigen::Vector2d> ends;
-  ends.reserve(2 * map.segments.size());
-  for (const auto& s : map.segments) {
-    ends.push_back(s.a);
-    ends.push_back(s.b);
-  }
   // A line marker needs two points at least; an empty set is simply not drawn.
-  if (!ends.empty()) markers.push_back(Lines(kSegments, 0, stamp_ns, frame, ends));
+  if (!map.segments.empty()) {
+    markers.push_back(Lines(kSegments, 0, stamp_ns, frame, Ends(map.segments)));
+  }
   if (map.path.size() >= 2) markers.push_back(Lines(kPath, 0, stamp_ns, frame, map.path));
   if (map.boundary.outer.size() >= 2) {
     markers.push_back(Lines(kBoundary, 0, stamp_ns, frame, map.boundary.outer));
@@ -77,13 +84,9 @@ void ToRosMarkers(const perceptual_map::PerceptualMap& map, int64_t stamp_ns,
   if (map.boundary.inner.size() >= 2) {
     markers.push_back(Lines(kBoundary, 1, stamp_ns, frame, map.boundary.inner));
   }
-  std::vector<Eigen::Vector2d> kept;
-  kept.reserve(2 * map.kept_segments.size());
-  for (const auto& s : map.kept_segments) {
-    kept.push_back(s.a);
-    kept.push_back(s.b);
+  if (!map.kept_segments.empty()) {
+    markers.push_back(Lines(kKeptSegments, 0, stamp_ns, frame, Ends(map.kept_segments)));
   }
-  if (!kept.empty()) markers.push_back(Lines(kKeptSegments, 0, stamp_ns, frame, kept));
 }
 
 }  // namespace epmap::mapping
