@@ -400,17 +400,52 @@ cv::Mat LayeredGrid::SyntheticMap() const {
   return m;
 }
 
-template <typename CellAt>
-GridExport LayeredGrid::ExportCells(const CellAt& cell_at, double unknown_below) const {
+void LayeredGrid::ReadRow(std::optional<int> layer, int first_layers, int r, int c0, int c1,
+                          Cell* out) const {
+  if (layer) {
+    const Layer& L = layers_[static_cast<size_t>(*layer)];
+    if (L.empty.empty()) {  // a layer never allocated reads as never seen, as At() says
+      for (int c = c0; c < c1; ++c) out[c - c0] = {};
+      return;
+    }
+    const float* e = L.empty.ptr<float>(r);
+    const float* o = L.occupied.ptr<float>(r);
+    const float* k = L.confidence.ptr<float>(r);
+    for (int c = c0; c < c1; ++c) out[c - c0] = {e[c], o[c], k[c]};
+    return;
+  }
+  // O = max_l O_l, E = min(max_l E_l, 1 - O), K = max_l K_l (the combined map, see Combined).
+  for (int c = c0; c < c1; ++c) out[c - c0] = {};
+  for (int l = 0; l < first_layers; ++l) {
+    const Layer& L = layers_[static_cast<size_t>(l)];
+    if (L.empty.empty()) continue;
+    const float* e = L.empty.ptr<float>(r);
+    const float* o = L.occupied.ptr<float>(r);
+    const float* k = L.confidence.ptr<float>(r);
+    for (int c = c0; c < c1; ++c) {
+      Cell& cell = out[c - c0];
+      cell.empty = std::max(cell.empty, e[c]);  // max_l E_l for now
+      cell.occupied = std::max(cell.occupied, o[c]);
+      cell.confidence = std::max(cell.confidence, k[c]);
+    }
+  }
+  for (int c = c0; c < c1; ++c) {
+    Cell& cell = out[c - c0];
+    cell.empty = std::min(cell.empty, 1.0F - cell.occupied);
+  }
+}
+
+GridExport LayeredGrid::ExportCells(std::optional<int> layer, int first_layers,
+                                    double unknown_below) const {
   // The cells, and the box around the known ones: the export is cropped to it, one unknown
   // cell of margin around.
   std::vector<Cell> cells(static_cast<size_t>(width_) * static_cast<size_t>(height_));
   int c_lo = width_, c_hi = -1, r_lo = height_, r_hi = -1;
   for (int r = 0; r < height_; ++r) {
+    Cell* row = cells.data() + static_cast<size_t>(r) * static_cast<size_t>(width_);
+    ReadRow(layer, first_layers, r, 0, width_, row);
     for (int c = 0; c < width_; ++c) {
-      const Cell cell = cell_at(min_ix_ + c, min_iy_ + r);
-      cells[static_cast<size_t>(r) * static_cast<size_t>(width_) + static_cast<size_t>(c)] = cell;
-      if (cell.confidence >= unknown_below) {
+      if (row[c].confidence >= unknown_below) {
         c_lo = std::min(c_lo, c);
         c_hi = std::max(c_hi, c);
         r_lo = std::min(r_lo, r);
@@ -479,9 +514,8 @@ CellWindow WindowOverBox(double resolution_m, double min_x, double min_y, double
   return w;
 }
 
-template <typename CellAt>
-GridExport LayeredGrid::ExportCellsIn(const CellWindow& window, const CellAt& cell_at,
-                                      double unknown_below) const {
+GridExport LayeredGrid::ExportCellsIn(const CellWindow& window, std::optional<int> layer,
+                                      int first_layers, double unknown_below) const {
   GridExport e;
   e.resolution_m = params_.resolution_m;
   e.origin_x = static_cast<double>(window.ix0) * params_.resolution_m;
@@ -499,11 +533,16 @@ GridExport LayeredGrid::ExportCellsIn(const CellWindow& window, const CellAt& ce
   const int64_t ix_hi = std::min(window.ix0 + static_cast<int64_t>(window.width), min_ix_ + width_);
   const int64_t iy_hi =
       std::min(window.iy0 + static_cast<int64_t>(window.height), min_iy_ + height_);
+  if (ix_lo >= ix_hi) return e;
+  const int c0 = static_cast<int>(ix_lo - min_ix_), c1 = static_cast<int>(ix_hi - min_ix_);
+  std::vector<Cell> row(static_cast<size_t>(c1 - c0));
   for (int64_t iy = iy_lo; iy < iy_hi; ++iy) {
-    const size_t row = static_cast<size_t>(iy - window.iy0) * window.width;
-    for (int64_t ix = ix_lo; ix < ix_hi; ++ix) {
-      const size_t i = row + static_cast<size_t>(ix - window.ix0);
-      PutCell(cell_at(ix, iy), unknown_below, &e.occupancy[i], &e.confidence[i]);
+    ReadRow(layer, first_layers, static_cast<int>(iy - min_iy_), c0, c1, row.data());
+    const size_t start = static_cast<size_t>(iy - window.iy0) * window.width +
+                         static_cast<size_t>(ix_lo - window.ix0);
+    for (int c = c0; c < c1; ++c) {
+      const size_t i = start + static_cast<size_t>(c - c0);
+      PutCell(row[static_cast<size_t>(c - c0)], unknown_below, &e.occupancy[i], &e.confidence[i]);
     }
   }
   return e;
@@ -513,8 +552,7 @@ GridExport LayeredGrid::ExportWindow(const CellWindow& window, std::optional<int
                                      double unknown_below) const {
   if (!layer) return ExportBelowWindow(window, layer_count(), unknown_below);
   CheckLayer(*layer);
-  GridExport e = ExportCellsIn(
-      window, [&](int64_t ix, int64_t iy) { return At(*layer, ix, iy); }, unknown_below);
+  GridExport e = ExportCellsIn(window, layer, 0, unknown_below);
   e.combined = false;
   e.layer = static_cast<uint32_t>(*layer);
   return e;
@@ -523,9 +561,7 @@ GridExport LayeredGrid::ExportWindow(const CellWindow& window, std::optional<int
 GridExport LayeredGrid::ExportBelowWindow(const CellWindow& window, int first_layers,
                                           double unknown_below) const {
   CheckFirstLayers(first_layers);
-  GridExport e = ExportCellsIn(
-      window, [&](int64_t ix, int64_t iy) { return CombineLowest(ix, iy, first_layers); },
-      unknown_below);
+  GridExport e = ExportCellsIn(window, std::nullopt, first_layers, unknown_below);
   e.combined = true;
   e.combined_layers = static_cast<uint32_t>(first_layers);
   return e;
@@ -534,8 +570,7 @@ GridExport LayeredGrid::ExportBelowWindow(const CellWindow& window, int first_la
 GridExport LayeredGrid::Export(std::optional<int> layer, double unknown_below) const {
   if (!layer) return ExportBelow(layer_count(), unknown_below);
   CheckLayer(*layer);
-  GridExport e =
-      ExportCells([&](int64_t ix, int64_t iy) { return At(*layer, ix, iy); }, unknown_below);
+  GridExport e = ExportCells(layer, 0, unknown_below);
   e.combined = false;
   e.layer = static_cast<uint32_t>(*layer);
   return e;
@@ -543,8 +578,7 @@ GridExport LayeredGrid::Export(std::optional<int> layer, double unknown_below) c
 
 GridExport LayeredGrid::ExportBelow(int first_layers, double unknown_below) const {
   CheckFirstLayers(first_layers);
-  GridExport e = ExportCells(
-      [&](int64_t ix, int64_t iy) { return CombineLowest(ix, iy, first_layers); }, unknown_below);
+  GridExport e = ExportCells(std::nullopt, first_layers, unknown_below);
   e.combined = true;
   e.combined_layers = static_cast<uint32_t>(first_layers);
   return e;

@@ -207,12 +207,14 @@ class LayeredGrid {
   void CheckLayer(int layer) const;
   void CheckFirstLayers(int first_layers) const;
   Cell CombineLowest(int64_t ix, int64_t iy, int first_layers) const;  // Combined, unchecked
-  // The export of whatever cell(ix, iy) gives, cropped to its known cells plus one.
-  template <typename CellAt>
-  GridExport ExportCells(const CellAt& cell_at, double unknown_below) const;
+  // Cells c0 .. c1 - 1 of grid row r (0 .. height() - 1) into out: of `layer`, or without one
+  // the combined map of the lowest first_layers (as CombineLowest), read row by row from the
+  // planes (an export reads every cell; At() per cell cost it several times more).
+  void ReadRow(std::optional<int> layer, int first_layers, int r, int c0, int c1, Cell* out) const;
+  // The export of ReadRow's cells, cropped to the known ones plus one.
+  GridExport ExportCells(std::optional<int> layer, int first_layers, double unknown_below) const;
   // The same over exactly `window`.
-  template <typename CellAt>
-  GridExport ExportCellsIn(const CellWindow& window, const CellAt& cell_at,
+  GridExport ExportCellsIn(const CellWindow& window, std::optional<int> layer, int first_layers,
                            double unknown_below) const;
 
   GridParams params_;

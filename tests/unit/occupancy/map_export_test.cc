@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <random>
+#include <utility>
 
 #include "perception/occupancy/map_export.h"
 
@@ -109,6 +111,56 @@ TEST(Export, ABoxThatIsNoWindowIsRefused) {
   EXPECT_EQ(w.iy0, -1);
   EXPECT_EQ(w.width, 1u);
   EXPECT_EQ(w.height, 1u);
+}
+
+// The export reads the planes row by row; every byte must be what the cell reads through At()
+// and Combined() gives: for the combined map, each band, the bands a low robot can hit, and a
+// window, on a grid of random rays.
+TEST(Export, RowByRowGivesTheBytesOfEveryCellAsAtAndCombinedRead) {
+  occupancy::LayeredGrid g;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> xy(-4.0, 4.0), z(0.05, 2.1);
+  for (int k = 0; k < 400; ++k) {
+    g.AddPoint({xy(rng) / 4, xy(rng) / 4, 1.0}, {xy(rng), xy(rng), z(rng)}, 0.02, {});
+  }
+  const auto bytes_of = [](const occupancy::Cell& cell, double unknown_below) {
+    const uint8_t k =
+        static_cast<uint8_t>(std::lround(255.0 * std::clamp(cell.confidence, 0.0F, 1.0F)));
+    if (cell.confidence < unknown_below) return std::pair<uint8_t, uint8_t>(255, k);
+    const double occ = std::clamp(50.0 + 50.0 * (cell.occupied - cell.empty), 0.0, 100.0);
+    return std::pair<uint8_t, uint8_t>(static_cast<uint8_t>(std::lround(occ)), k);
+  };
+  // Every cell of e against read(ix, iy).
+  const auto check = [&](const occupancy::GridExport& e, const auto& read, const char* what) {
+    ASSERT_GT(e.width * e.height, 100u) << what;
+    size_t differ = 0;
+    for (uint32_t r = 0; r < e.height; ++r) {
+      for (uint32_t c = 0; c < e.width; ++c) {
+        const int64_t ix = std::lround(e.origin_x / e.resolution_m) + c;
+        const int64_t iy = std::lround(e.origin_y / e.resolution_m) + r;
+        const auto [occ, conf] = bytes_of(read(ix, iy), 0.05);
+        const size_t i = static_cast<size_t>(r) * e.width + c;
+        differ += e.occupancy[i] != occ || e.confidence[i] != conf;
+      }
+    }
+    EXPECT_EQ(differ, 0u) << what;
+  };
+  check(
+      g.Export(), [&](int64_t ix, int64_t iy) { return g.Combined(ix, iy); }, "combined");
+  for (int l = 0; l < g.layer_count(); ++l) {
+    check(
+        g.Export(l), [&](int64_t ix, int64_t iy) { return g.At(l, ix, iy); }, "a layer");
+  }
+  check(
+      g.ExportBelow(2), [&](int64_t ix, int64_t iy) { return g.Combined(ix, iy, 2); },
+      "the lowest two bands");
+  const auto window = occupancy::WindowOverBox(0.1, -6, -1, 2, 7);  // reaches past the grid
+  check(
+      g.ExportWindow(window), [&](int64_t ix, int64_t iy) { return g.Combined(ix, iy); },
+      "a window");
+  check(
+      g.ExportWindow(window, 1), [&](int64_t ix, int64_t iy) { return g.At(1, ix, iy); },
+      "a window of a layer");
 }
 
 TEST(Export, MapServerPgmAndYaml) {
