@@ -437,15 +437,13 @@ void LayeredGrid::ReadRow(std::optional<int> layer, int first_layers, int r, int
 
 GridExport LayeredGrid::ExportCells(std::optional<int> layer, int first_layers,
                                     double unknown_below) const {
-  // The cells, and the box around the known ones: the export is cropped to it, one unknown
-  // cell of margin around.
-  std::vector<Cell> cells(static_cast<size_t>(width_) * static_cast<size_t>(height_));
+  // The box around the known cells, one unknown cell of margin around, is the window exported.
+  std::vector<Cell> row(static_cast<size_t>(width_));
   int c_lo = width_, c_hi = -1, r_lo = height_, r_hi = -1;
   for (int r = 0; r < height_; ++r) {
-    Cell* row = cells.data() + static_cast<size_t>(r) * static_cast<size_t>(width_);
-    ReadRow(layer, first_layers, r, 0, width_, row);
+    ReadRow(layer, first_layers, r, 0, width_, row.data());
     for (int c = 0; c < width_; ++c) {
-      if (row[c].confidence >= unknown_below) {
+      if (row[static_cast<size_t>(c)].confidence >= unknown_below) {
         c_lo = std::min(c_lo, c);
         c_hi = std::max(c_hi, c);
         r_lo = std::min(r_lo, r);
@@ -453,36 +451,16 @@ GridExport LayeredGrid::ExportCells(std::optional<int> layer, int first_layers,
       }
     }
   }
-  if (c_hi < 0) {
-    c_lo = r_lo = 0;
-    c_hi = r_hi = -1;
-  } else {
+  CellWindow known{min_ix_, min_iy_, 0, 0};  // no known cell: an empty export
+  if (c_hi >= 0) {
     c_lo = std::max(0, c_lo - 1);
     r_lo = std::max(0, r_lo - 1);
     c_hi = std::min(width_ - 1, c_hi + 1);
     r_hi = std::min(height_ - 1, r_hi + 1);
+    known = {min_ix_ + c_lo, min_iy_ + r_lo, static_cast<uint32_t>(c_hi - c_lo + 1),
+             static_cast<uint32_t>(r_hi - r_lo + 1)};
   }
-  GridExport e;
-  e.resolution_m = params_.resolution_m;
-  e.origin_x = static_cast<double>(min_ix_ + c_lo) * params_.resolution_m;
-  e.origin_y = static_cast<double>(min_iy_ + r_lo) * params_.resolution_m;
-  e.width = static_cast<uint32_t>(c_hi - c_lo + 1);
-  e.height = static_cast<uint32_t>(r_hi - r_lo + 1);
-  e.layer_count = static_cast<uint32_t>(layer_count());
-  e.layer_bounds_m = params_.layer_bounds_m;
-  const size_t n = static_cast<size_t>(e.width) * e.height;
-  e.occupancy.assign(n, GridExport::kUnknown);
-  e.confidence.assign(n, 0);
-  for (uint32_t r = 0; r < e.height; ++r) {
-    for (uint32_t c = 0; c < e.width; ++c) {
-      const Cell& cell =
-          cells[static_cast<size_t>(r + static_cast<uint32_t>(r_lo)) * static_cast<size_t>(width_) +
-                c + static_cast<uint32_t>(c_lo)];
-      const size_t i = static_cast<size_t>(r) * e.width + c;
-      PutCell(cell, unknown_below, &e.occupancy[i], &e.confidence[i]);
-    }
-  }
-  return e;
+  return ExportCellsIn(known, layer, first_layers, unknown_below);
 }
 
 CellWindow WindowOverBox(double resolution_m, double min_x, double min_y, double max_x,

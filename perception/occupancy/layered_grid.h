@@ -211,7 +211,7 @@ class LayeredGrid {
   // the combined map of the lowest first_layers (as CombineLowest), read row by row from the
   // planes (an export reads every cell; At() per cell cost it several times more).
   void ReadRow(std::optional<int> layer, int first_layers, int r, int c0, int c1, Cell* out) const;
-  // The export of ReadRow's cells, cropped to the known ones plus one.
+  // The export of ReadRow's cells, cropped to the known ones plus one (ExportCellsIn of that box).
   GridExport ExportCells(std::optional<int> layer, int first_layers, double unknown_below) const;
   // The same over exactly `window`.
   GridExport ExportCellsIn(const CellWindow& window, std::optional<int> layer, int first_layers,
