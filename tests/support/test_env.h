@@ -14,6 +14,8 @@
 #include <map>
 #include <mutex>
 #include <string>
+#include <system_error>
+#include <vector>
 
 #ifndef EPMAP_DEFAULT_BIN_DIR
 #define EPMAP_DEFAULT_BIN_DIR "build/bin"
@@ -64,13 +66,42 @@ inline uint32_t UniqueDomainId(uint32_t salt = 0) {
   return first + 20u;  // every id taken: share one rather than fail
 }
 
-// A fresh empty folder under the system temp dir, removed by the caller if wanted.
+// Folders FreshTempDir made; removed when the test binary exits after every test passed, so
+// repeated runs do not fill /tmp. A failed run keeps them to look at, and so does any run with
+// EPMAP_KEEP_TEST_DIRS set.
+class TempDirRegistry {
+ public:
+  static TempDirRegistry& Instance() {
+    static TempDirRegistry registry;  // made after gtest's UnitTest, so destroyed before it
+    return registry;
+  }
+  void Add(const std::filesystem::path& dir) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    dirs_.push_back(dir);
+  }
+  ~TempDirRegistry() {
+    const char* keep = std::getenv("EPMAP_KEEP_TEST_DIRS");
+    if ((keep && *keep) || !::testing::UnitTest::GetInstance()->Passed()) return;
+    for (const auto& dir : dirs_) {
+      std::error_code ignored;
+      std::filesystem::remove_all(dir, ignored);
+    }
+  }
+
+ private:
+  TempDirRegistry() { (void)::testing::UnitTest::GetInstance(); }
+  std::mutex mutex_;
+  std::vector<std::filesystem::path> dirs_;
+};
+
+// A fresh empty folder under the system temp dir (see TempDirRegistry for when it goes).
 inline std::filesystem::path FreshTempDir(const std::string& tag) {
   const auto dir =
       std::filesystem::temp_directory_path() /
       ("epmap-" + tag + "-" + std::to_string(::getpid()) + "-" + std::to_string(std::rand()));
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
+  TempDirRegistry::Instance().Add(dir);
   return dir;
 }
 
