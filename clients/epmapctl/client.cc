@@ -30,6 +30,20 @@ void MapsWait::AddOptions(CLI::App* command) {
       ->check(CLI::Range(0u, 30000u));
 }
 
+void MapWindow::AddOptions(CLI::App* command, const std::string& what_is_kept) {
+  auto* box = command
+                  ->add_option("--region", region,
+                               "only " + what_is_kept +
+                                   " in this box of the world frame: MIN_X,MIN_Y,MAX_X,MAX_Y (m)")
+                  ->delimiter(',')
+                  ->expected(4);
+  command
+      ->add_option("--around-robot", around_robot_m,
+                   "only " + what_is_kept +
+                       " in a square of this side (m) centred on the robot's corrected pose")
+      ->excludes(box);
+}
+
 namespace {
 const char* CodeName(grpc::StatusCode code) {
   switch (code) {

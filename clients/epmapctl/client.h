@@ -8,6 +8,7 @@
 #include <functional>
 #include <memory>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -35,6 +36,27 @@ struct MapsWait {
   void Apply(Request* request) const {
     request->set_newer_than_ns(newer_than_ns);
     request->set_wait_ms(wait_ms);
+  }
+};
+
+// --region / --around-robot of the maps commands (pmap, grid): a window of the map, a box of
+// the world frame or a square centred on the robot, as a local planner asks for it.
+struct MapWindow {
+  std::vector<double> region;  // min_x, min_y, max_x, max_y (m)
+  std::optional<double> around_robot_m;
+  // what_is_kept: what the window holds, for the help ("the cells", "the segments with some
+  // part").
+  void AddOptions(CLI::App* command, const std::string& what_is_kept);
+  template <typename Request>
+  void Apply(Request* request) const {
+    if (!region.empty()) {
+      auto* box = request->mutable_region();
+      box->set_min_x(region[0]);
+      box->set_min_y(region[1]);
+      box->set_max_x(region[2]);
+      box->set_max_y(region[3]);
+    }
+    if (around_robot_m) request->set_around_robot_m(*around_robot_m);
   }
 };
 

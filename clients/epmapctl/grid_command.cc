@@ -25,8 +25,7 @@ struct Args {
   std::string out;
   std::optional<uint32_t> layer;
   std::optional<double> max_height_m;
-  std::vector<double> region;  // min_x, min_y, max_x, max_y (m)
-  std::optional<double> around_robot_m;
+  epmap::ctl::MapWindow window;
   epmap::ctl::MapsWait wait;
 };
 
@@ -80,14 +79,7 @@ int Run(const ClientOptions& options, const Args& args) {
   epmap::v1::GetOccupancyGridRequest request;
   if (args.layer) request.set_layer(*args.layer);
   if (args.max_height_m) request.set_max_height_m(*args.max_height_m);
-  if (!args.region.empty()) {
-    auto* box = request.mutable_region();
-    box->set_min_x(args.region[0]);
-    box->set_min_y(args.region[1]);
-    box->set_max_x(args.region[2]);
-    box->set_max_y(args.region[3]);
-  }
-  if (args.around_robot_m) request.set_around_robot_m(*args.around_robot_m);
+  args.window.Apply(&request);
   args.wait.Apply(&request);
   epmap::v1::OccupancyGrid grid;
   const auto context = options.Context(args.wait.wait_ms);
@@ -132,14 +124,7 @@ void Setup(CLI::App& app, ClientOptions& options) {
   cmd->add_option("--max-height", args->max_height_m,
                   "the bands a robot this tall (m) can hit, combined (those starting below it)")
       ->excludes(layer);
-  auto* region = cmd->add_option("--region", args->region,
-                                 "only this box of the world frame: MIN_X,MIN_Y,MAX_X,MAX_Y (m); "
-                                 "cells the map has not seen are unknown")
-                     ->delimiter(',')
-                     ->expected(4);
-  cmd->add_option("--around-robot", args->around_robot_m,
-                  "only a square of this side (m) centred on the robot's corrected pose")
-      ->excludes(region);
+  args->window.AddOptions(cmd, "the cells");
   args->wait.AddOptions(cmd);
   cmd->callback([&options, args] { options.exit_code = Run(options, *args); });
 }

@@ -1,10 +1,11 @@
-// epmapctl pmap --out map.svg|map.json [--kept-only]: the perceptual map of a mobile base
-// (issue 6), or only the segments paper 003's redundancy removal keeps (III-D, its Fig. 10).
+// epmapctl pmap --out map.svg|map.json [--kept-only]
+//              [--region MIN_X,MIN_Y,MAX_X,MAX_Y | --around-robot SIDE]: the perceptual map of a
+// mobile base (issue 6), or only the segments paper 003's redundancy removal keeps (III-D, its
+// Fig. 10), or only those in a window (a box of the world frame, or a square around the robot).
 // .json in the layout `epmap-bench maps` writes (metres, world frame = the robot's start
-// pose): {"stamp_ns","includes_open_stop","resumed_unconfirmed","segments_in_map",
+// pose): {"stamp_ns","includes_open_stop","resumed_unconfirmed","segments_in_map","window",
 // "segments":[{"id","x1","y1","x2","y2","view_id","observations","kept"}],"path":[[x,y]],
 // "boundary":[[x,y]],"inner_boundary":[[x,y]],"views":[...]}; .svg a picture for people.
-
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
@@ -12,6 +13,7 @@
 #include <iostream>
 #include <limits>
 #include <sstream>
+#include <string>
 
 #include "clients/epmapctl/client.h"
 #include "epmap/v1/map_service.grpc.pb.h"
@@ -39,7 +41,8 @@ std::string Json(const epmap::v1::PerceptualMap& m) {
   s << "{\"stamp_ns\":" << m.stamp_ns()
     << ",\"includes_open_stop\":" << (m.includes_open_stop() ? "true" : "false")
     << ",\"resumed_unconfirmed\":" << (m.resumed_unconfirmed() ? "true" : "false")
-    << ",\"segments_in_map\":" << m.segments_in_map() << ",\"segments\":[";
+    << ",\"segments_in_map\":" << m.segments_in_map()
+    << ",\"window\":" << (m.window() ? "true" : "false") << ",\"segments\":[";
   for (int i = 0; i < m.segments_size(); ++i) {
     const auto& g = m.segments(i);
     s << (i ? "," : "") << "{\"id\":" << g.id() << ",\"x1\":" << Num(g.x1())
@@ -105,8 +108,15 @@ std::string Svg(const epmap::v1::PerceptualMap& m) {
   return s.str();
 }
 
-int Run(const ClientOptions& options, const std::string& out_path, bool kept_only,
-        const epmap::ctl::MapsWait& wait) {
+struct Args {
+  std::string out;
+  bool kept_only = false;
+  epmap::ctl::MapWindow window;
+  epmap::ctl::MapsWait wait;
+};
+
+int Run(const ClientOptions& options, const Args& args) {
+  const std::string& out_path = args.out;
   const std::string ext = std::filesystem::path(out_path).extension().string();
   if (ext != ".svg" && ext != ".json") {
     std::cerr << "epmapctl: --out must end in .svg (picture) or .json (segments, path, boundary)\n";
@@ -115,9 +125,10 @@ int Run(const ClientOptions& options, const std::string& out_path, bool kept_onl
   auto stub = epmap::v1::MapService::NewStub(options.Channel());
   epmap::v1::PerceptualMap map;
   epmap::v1::GetPerceptualMapRequest request;
-  wait.Apply(&request);
-  request.set_kept_only(kept_only);
-  const auto context = options.Context(wait.wait_ms);
+  args.wait.Apply(&request);
+  request.set_kept_only(args.kept_only);
+  args.window.Apply(&request);
+  const auto context = options.Context(args.wait.wait_ms);
   const grpc::Status rpc = stub->GetPerceptualMap(context.get(), request, &map);
   if (!rpc.ok()) return options.Fail(rpc);
   std::ofstream out(out_path, std::ios::binary);
@@ -129,10 +140,11 @@ int Run(const ClientOptions& options, const std::string& out_path, bool kept_onl
   const auto kept = std::count_if(map.segments().begin(), map.segments().end(),
                                   [](const epmap::v1::MapSegment& g) { return g.kept(); });
   std::printf(
-      "wrote %s: %d segments of %u (%ld kept by the redundancy removal), %d views, path "
+      "wrote %s: %d segments of %u%s (%ld kept by the redundancy removal), %d views, path "
       "of %d points (stamp %lld ns)%s%s\n",
-      out_path.c_str(), map.segments_size(), map.segments_in_map(), static_cast<long>(kept),
-      map.views_size(), map.path_size(), static_cast<long long>(map.stamp_ns()),
+      out_path.c_str(), map.segments_size(), map.segments_in_map(),
+      map.window() ? " (those in the window)" : "", static_cast<long>(kept), map.views_size(),
+      map.path_size(), static_cast<long long>(map.stamp_ns()),
       map.includes_open_stop() ? ", with the stop under way (provisional)" : "",
       map.resumed_unconfirmed() ? epmap::ctl::kResumedNote : "");
   return 0;
@@ -140,17 +152,14 @@ int Run(const ClientOptions& options, const std::string& out_path, bool kept_onl
 
 void Setup(CLI::App& app, ClientOptions& options) {
   auto* cmd = app.add_subcommand("pmap", "write the perceptual map (mobile-base mode) to a file");
-  auto out = std::make_shared<std::string>();
-  cmd->add_option("--out", *out, "FILE.svg (picture) or FILE.json (metres, world frame)")
+  auto args = std::make_shared<Args>();
+  cmd->add_option("--out", args->out, "FILE.svg (picture) or FILE.json (metres, world frame)")
       ->required();
-  auto kept_only = std::make_shared<bool>(false);
-  cmd->add_flag("--kept-only", *kept_only,
+  cmd->add_flag("--kept-only", args->kept_only,
                 "only the segments the redundancy removal keeps (paper 003 III-D, its Fig. 10)");
-  auto wait = std::make_shared<epmap::ctl::MapsWait>();
-  wait->AddOptions(cmd);
-  cmd->callback([&options, out, kept_only, wait] {
-    options.exit_code = Run(options, *out, *kept_only, *wait);
-  });
+  args->window.AddOptions(cmd, "the segments with some part");
+  args->wait.AddOptions(cmd);
+  cmd->callback([&options, args] { options.exit_code = Run(options, *args); });
 }
 
 }  // namespace

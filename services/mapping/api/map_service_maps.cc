@@ -2,16 +2,19 @@
 // from the newest snapshot's maps (services/mapping/pipeline/pipeline_maps.cc). Errors:
 // FAILED_PRECONDITION when the service is not in mobile-base mode or no key frame has made a
 // map yet, INVALID_ARGUMENT for a layer the grid does not have, a max_height_m below its lowest
-// band, or both at once, a grid window that is no box or larger than the message limit,
-// DEADLINE_EXCEEDED when no maps newer than newer_than_ns came within wait_ms.
+// band, or both at once, a window (of either map) that is no box, a grid window larger than the
+// message limit, DEADLINE_EXCEEDED when no maps newer than newer_than_ns came within wait_ms.
 
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <optional>
+#include <unordered_map>
 #include <unordered_set>
 
 #include <spdlog/fmt/fmt.h>
 
+#include "perception/perceptual_map/map_window.h"
 #include "services/mapping/api/map_service.h"
 #include "services/mapping/service.h"
 
@@ -30,23 +33,38 @@ void ToProto(const Eigen::Vector2d& p, v1::Point2D* out) {
   out->set_y(p.y());
 }
 
-// A window of the grid (GetOccupancyGridRequest region / around_robot_m): what can be checked
-// before there is a map to look at.
-grpc::Status CheckGridWindowRequest(const v1::GetOccupancyGridRequest& request) {
-  if (request.has_region() && request.has_around_robot_m()) {
+// A window of the maps (GetOccupancyGridRequest / GetPerceptualMapRequest region or
+// around_robot_m), as both requests spell it.
+struct WindowRequest {
+  const v1::GridRegion* region = nullptr;
+  std::optional<double> around_robot_m;
+
+  template <class Request>
+  static WindowRequest Of(const Request& request) {
+    WindowRequest w;
+    if (request.has_region()) w.region = &request.region();
+    if (request.has_around_robot_m()) w.around_robot_m = request.around_robot_m();
+    return w;
+  }
+  bool asked() const { return region || around_robot_m; }
+};
+
+// What can be checked before there is a map to look at.
+grpc::Status CheckWindowRequest(const WindowRequest& request) {
+  if (request.region && request.around_robot_m) {
     return {grpc::StatusCode::INVALID_ARGUMENT,
             "give a region or around_robot_m, not both (a region is a box in the world frame; "
             "around_robot_m a square centred on the robot)"};
   }
-  if (request.has_around_robot_m() &&
-      !(request.around_robot_m() > 0 && std::isfinite(request.around_robot_m()))) {
+  if (request.around_robot_m &&
+      !(*request.around_robot_m > 0 && std::isfinite(*request.around_robot_m))) {
     return {grpc::StatusCode::INVALID_ARGUMENT,
             fmt::format("around_robot_m {} must be a positive number of metres (the side of "
                         "the square around the robot)",
-                        request.around_robot_m())};
+                        *request.around_robot_m)};
   }
-  if (request.has_region()) {
-    const auto& b = request.region();
+  if (request.region) {
+    const auto& b = *request.region;
     if (!std::isfinite(b.min_x()) || !std::isfinite(b.min_y()) || !std::isfinite(b.max_x()) ||
         !std::isfinite(b.max_y()) || !(b.min_x() < b.max_x()) || !(b.min_y() < b.max_y())) {
       return {grpc::StatusCode::INVALID_ARGUMENT,
@@ -58,33 +76,36 @@ grpc::Status CheckGridWindowRequest(const v1::GetOccupancyGridRequest& request) 
   return grpc::Status::OK;
 }
 
-// The window asked for on these maps' lattice (nullopt: none asked for), refused when it would
-// not fit in a message of max_message_mb (2 bytes a cell, and room for the rest of the message).
-grpc::Status GridWindowOf(const v1::GetOccupancyGridRequest& request,
-                          const mobile_mapping::MapsSnapshot& maps, int max_message_mb,
-                          std::optional<occupancy::CellWindow>* window) {
-  window->reset();
-  if (!request.has_region() && !request.has_around_robot_m()) return grpc::Status::OK;
-  double min_x = 0, min_y = 0, max_x = 0, max_y = 0;
-  if (request.has_region()) {
-    const auto& b = request.region();
-    min_x = b.min_x();
-    min_y = b.min_y();
-    max_x = b.max_x();
-    max_y = b.max_y();
-  } else {
-    if (maps.poses.empty()) {
-      return {grpc::StatusCode::FAILED_PRECONDITION,
-              "no pose yet to centre the window on (no key frame has been accepted)"};
-    }
-    // The corrected pose of the same key frame as the grid: no race with a separate GetPose.
-    const Eigen::Vector2d at = maps.poses.back().T_world_base.translation();
-    const double half = request.around_robot_m() / 2;
-    min_x = at.x() - half;
-    min_y = at.y() - half;
-    max_x = at.x() + half;
-    max_y = at.y() + half;
+// The window's box in the world frame on these maps (a checked request that asked for one).
+grpc::Status WindowBoxOf(const WindowRequest& request, const mobile_mapping::MapsSnapshot& maps,
+                         Eigen::AlignedBox2d* box) {
+  if (request.region) {
+    const auto& b = *request.region;
+    *box = Eigen::AlignedBox2d(Eigen::Vector2d(b.min_x(), b.min_y()),
+                               Eigen::Vector2d(b.max_x(), b.max_y()));
+    return grpc::Status::OK;
   }
+  if (maps.poses.empty()) {
+    return {grpc::StatusCode::FAILED_PRECONDITION,
+            "no pose yet to centre the window on (no key frame has been accepted)"};
+  }
+  // The corrected pose of the same key frame as the maps: no race with a separate GetPose.
+  const Eigen::Vector2d at = maps.poses.back().T_world_base.translation();
+  const Eigen::Vector2d half = Eigen::Vector2d::Constant(*request.around_robot_m / 2);
+  *box = Eigen::AlignedBox2d(at - half, at + half);
+  return grpc::Status::OK;
+}
+
+// The grid window asked for on these maps' lattice (nullopt: none asked for), refused when it
+// would not fit in a message of max_message_mb (2 bytes a cell, and room for the rest).
+grpc::Status GridWindowOf(const WindowRequest& request, const mobile_mapping::MapsSnapshot& maps,
+                          int max_message_mb, std::optional<occupancy::CellWindow>* window) {
+  window->reset();
+  if (!request.asked()) return grpc::Status::OK;
+  Eigen::AlignedBox2d box;
+  if (auto bad = WindowBoxOf(request, maps, &box); !bad.ok()) return bad;
+  const double min_x = box.min().x(), min_y = box.min().y();
+  const double max_x = box.max().x(), max_y = box.max().y();
   try {
     *window = occupancy::WindowOverBox(maps.grid.resolution(), min_x, min_y, max_x, max_y);
   } catch (const std::invalid_argument& e) {
@@ -157,21 +178,32 @@ grpc::Status MapServiceImpl::LatestMaps(grpc::ServerContext* context, int64_t ne
 grpc::Status MapServiceImpl::GetPerceptualMap(grpc::ServerContext* context,
                                               const v1::GetPerceptualMapRequest* request,
                                               v1::PerceptualMap* out) {
+  const auto window = WindowRequest::Of(*request);
+  if (auto bad = CheckWindowRequest(window); !bad.ok()) return bad;
   std::shared_ptr<const mobile_mapping::MapsSnapshot> maps;
   if (auto status = LatestMaps(context, request->newer_than_ns(), request->wait_ms(), &maps);
       !status.ok()) {
     return status;
+  }
+  std::optional<Eigen::AlignedBox2d> box;
+  if (window.asked()) {
+    box.emplace();
+    if (auto bad = WindowBoxOf(window, *maps, &*box); !bad.ok()) return bad;
   }
   const auto& m = maps->perceptual;
   out->set_stamp_ns(maps->stamp_ns);
   out->set_includes_open_stop(maps->includes_open_stop);
   out->set_resumed_unconfirmed(maps->resumed_unconfirmed);
   out->set_segments_in_map(static_cast<uint32_t>(m.segments.size()));
+  out->set_window(box.has_value());
   std::unordered_set<uint32_t> kept;  // paper 003 III-D's redundancy removal
   for (const auto& s : m.kept_segments) kept.insert(s.id);
+  std::unordered_map<uint32_t, uint32_t> segments_of_view;
   for (const auto& s : m.segments) {
+    ++segments_of_view[s.view_id];
     const bool is_kept = kept.count(s.id) > 0;
     if (request->kept_only() && !is_kept) continue;
+    if (box && !perceptual_map::SegmentTouchesBox(s.a, s.b, *box)) continue;
     auto* seg = out->add_segments();
     seg->set_kept(is_kept);
     seg->set_id(s.id);
@@ -188,9 +220,7 @@ grpc::Status MapServiceImpl::GetPerceptualMap(grpc::ServerContext* context,
     view->set_id(v.id);
     view->set_stamp_ns(v.stamp_ns);
     ToProto(v.T_map_base, view->mutable_pose());
-    view->set_segments(static_cast<uint32_t>(
-        std::count_if(m.segments.begin(), m.segments.end(),
-                      [&](const perceptual_map::MapSegment& s) { return s.view_id == v.id; })));
+    view->set_segments(segments_of_view[v.id]);  // of the whole map, window or not
   }
   for (const auto& p : m.path) ToProto(p, out->add_path());
   for (const auto& p : m.boundary.outer) ToProto(p, out->add_boundary());
@@ -206,14 +236,15 @@ grpc::Status MapServiceImpl::GetOccupancyGrid(grpc::ServerContext* context,
             "give a layer or max_height_m, not both (a layer is one band; max_height_m combines "
             "the bands a robot that tall can hit)"};
   }
-  if (auto bad = CheckGridWindowRequest(*request); !bad.ok()) return bad;
+  const auto window_request = WindowRequest::Of(*request);
+  if (auto bad = CheckWindowRequest(window_request); !bad.ok()) return bad;
   std::shared_ptr<const mobile_mapping::MapsSnapshot> maps;
   if (auto status = LatestMaps(context, request->newer_than_ns(), request->wait_ms(), &maps);
       !status.ok()) {
     return status;
   }
   std::optional<occupancy::CellWindow> window;
-  if (auto bad = GridWindowOf(*request, *maps, service_.config().max_message_mb, &window);
+  if (auto bad = GridWindowOf(window_request, *maps, service_.config().max_message_mb, &window);
       !bad.ok()) {
     return bad;
   }

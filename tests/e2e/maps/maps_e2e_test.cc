@@ -38,6 +38,7 @@
 #include "common/dds/ros_conversions.h"
 #include "common/dds/topics.h"
 #include "perception/mobile_mapping/map_evaluation.h"
+#include "perception/perceptual_map/map_window.h"
 #include "tests/support/building_run.h"
 #include "tests/support/epmapd_fixture.h"
 
@@ -1143,6 +1144,124 @@ TEST_F(MapsFromPublishedFrames, ALocalPlannerGetsAWindowOfTheGrid) {
   ASSERT_TRUE(get({}, &again).ok());
   EXPECT_FALSE(again.window());
   EXPECT_GT(again.width(), 0u);
+}
+
+// The same windows of the perceptual map: the segments with some part in the box, of the
+// same key frame's map; views, path and boundaries whole.
+TEST_F(MapsFromPublishedFrames, ALocalPlannerGetsTheSegmentsInAWindow) {
+  ASSERT_NO_FATAL_FAILURE(Start("maps-pmap-window", 71));
+  for (int i = 0; i < 5; ++i) pub_->Frame(Stamp(i), 0.3 * i, 0.0, false);  // a key frame each
+  WaitForKeyFrames(5);
+  auto& stub = epmapd_->stub();
+  const auto get = [&](v1::GetPerceptualMapRequest request, v1::PerceptualMap* map) {
+    request.set_newer_than_ns(Stamp(4) - 1);  // the fifth key frame's maps
+    request.set_wait_ms(10000);
+    grpc::ClientContext context;
+    return stub.GetPerceptualMap(&context, request, map);
+  };
+  v1::PerceptualMap whole;
+  ASSERT_TRUE(get({}, &whole).ok());
+  ASSERT_FALSE(whole.window());
+  ASSERT_GT(whole.segments_size(), 1);
+  // The ids of the whole map's segments with some part in the box, in the map's order.
+  const auto ids_in = [&](const Eigen::AlignedBox2d& box) {
+    std::vector<uint32_t> ids;
+    for (const auto& g : whole.segments()) {
+      if (perceptual_map::SegmentTouchesBox({g.x1(), g.y1()}, {g.x2(), g.y2()}, box)) {
+        ids.push_back(g.id());
+      }
+    }
+    return ids;
+  };
+  const auto ids_of = [](const v1::PerceptualMap& map) {
+    std::vector<uint32_t> ids;
+    for (const auto& g : map.segments()) ids.push_back(g.id());
+    return ids;
+  };
+  const auto check_window = [&](const v1::PerceptualMap& window) {
+    EXPECT_TRUE(window.window());
+    EXPECT_EQ(window.stamp_ns(), whole.stamp_ns());
+    EXPECT_EQ(window.segments_in_map(), whole.segments_in_map());
+    EXPECT_EQ(window.path_size(), whole.path_size());
+    EXPECT_EQ(window.views_size(), whole.views_size());
+    EXPECT_EQ(window.boundary_size(), whole.boundary_size());
+  };
+
+  // A box around the first segment's first end: it, and whatever else reaches into the box.
+  const auto& first = whole.segments(0);
+  v1::GetPerceptualMapRequest box;
+  box.mutable_region()->set_min_x(first.x1() - 0.05);
+  box.mutable_region()->set_min_y(first.y1() - 0.05);
+  box.mutable_region()->set_max_x(first.x1() + 0.05);
+  box.mutable_region()->set_max_y(first.y1() + 0.05);
+  const Eigen::AlignedBox2d box_m(Eigen::Vector2d(first.x1() - 0.05, first.y1() - 0.05),
+                                  Eigen::Vector2d(first.x1() + 0.05, first.y1() + 0.05));
+  v1::PerceptualMap window;
+  ASSERT_TRUE(get(box, &window).ok());
+  check_window(window);
+  EXPECT_EQ(ids_of(window), ids_in(box_m));
+  EXPECT_GE(window.segments_size(), 1);
+  EXPECT_LT(window.segments_size(), whole.segments_size()) << "a 10 cm box holds a few walls";
+  // Far from anything: none, and the map says how many it holds.
+  v1::GetPerceptualMapRequest far;
+  far.mutable_region()->set_min_x(500);
+  far.mutable_region()->set_min_y(500);
+  far.mutable_region()->set_max_x(501);
+  far.mutable_region()->set_max_y(501);
+  ASSERT_TRUE(get(far, &window).ok());
+  check_window(window);
+  EXPECT_EQ(window.segments_size(), 0);
+  // A square around the robot, with the redundancy removal's choice on top.
+  v1::PoseEstimate pose;
+  {
+    grpc::ClientContext context;
+    ASSERT_TRUE(stub.GetPose(&context, {}, &pose).ok());
+  }
+  v1::GetPerceptualMapRequest around;
+  around.set_around_robot_m(3.0);
+  ASSERT_TRUE(get(around, &window).ok());
+  check_window(window);
+  const Eigen::Vector2d at(pose.corrected().x(), pose.corrected().y());
+  EXPECT_EQ(ids_of(window), ids_in(Eigen::AlignedBox2d(at - Eigen::Vector2d(1.5, 1.5),
+                                                       at + Eigen::Vector2d(1.5, 1.5))));
+  around.set_kept_only(true);
+  ASSERT_TRUE(get(around, &window).ok());
+  for (const auto& g : window.segments()) EXPECT_TRUE(g.kept()) << g.id();
+
+  // epmapctl writes the window's segments and says so.
+  const auto json = work_ / "window.json";
+  const auto [code, out] =
+      Ctl(*epmapd_, work_, {"pmap", "--out", json.string(), "--region", "500,500,501,501"});
+  ASSERT_EQ(code, 0) << out;
+  EXPECT_NE(out.find("wrote " + json.string() + ": 0 segments of " +
+                     std::to_string(whole.segments_in_map()) + " (those in the window)"),
+            std::string::npos)
+      << out;
+  EXPECT_NE(ReadText(json).find("\"window\":true,\"segments\":[]"), std::string::npos);
+
+  // Bad windows: INVALID_ARGUMENT saying what is wrong, as for the grid.
+  const auto refused = [&](const v1::GetPerceptualMapRequest& request, const std::string& says) {
+    v1::PerceptualMap unused;
+    const auto status = get(request, &unused);
+    EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << request.DebugString();
+    EXPECT_NE(status.error_message().find(says), std::string::npos) << status.error_message();
+  };
+  v1::GetPerceptualMapRequest inverted = box;
+  inverted.mutable_region()->set_max_x(first.x1() - 1.0);
+  refused(inverted, "min_x < max_x");
+  v1::GetPerceptualMapRequest not_a_number = box;
+  not_a_number.mutable_region()->set_max_y(std::numeric_limits<double>::quiet_NaN());
+  refused(not_a_number, "must be finite");
+  v1::GetPerceptualMapRequest both = box;
+  both.set_around_robot_m(3.0);
+  refused(both, "not both");
+  v1::GetPerceptualMapRequest no_side;
+  no_side.set_around_robot_m(-2.0);
+  refused(no_side, "positive number of metres");
+  // And the whole map as before.
+  ASSERT_TRUE(get({}, &window).ok());
+  EXPECT_FALSE(window.window());
+  EXPECT_EQ(ids_of(window), ids_of(whole));
 }
 
 // A planner that has the maps waits for the next ones instead of polling: the call returns when
