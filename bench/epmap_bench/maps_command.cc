@@ -41,6 +41,7 @@
 #include "perception/mobile_mapping/map_evaluation.h"
 #include "perception/mobile_mapping/mobile_mapper.h"
 #include "perception/occupancy/map_export.h"
+#include "perception/perceptual_map/map_window.h"
 #include "perception/stereo/rectification.h"
 #include "perception/stereo/sgbm.h"
 
@@ -505,6 +506,33 @@ std::string GridWindowJson(const epmap::mobile_mapping::MapsSnapshot& maps, doub
     << ",\"baseline_bytes\":" << 2 * whole.occupancy.size()
     << ",\"baseline_ms_median\":" << FormatFixed(Median(whole_ms), 3)
     << ",\"ratio_to_baseline\":" << FormatFixed(Median(window_ms) / Median(whole_ms), 3)
+    << ",\"repeat\":" << repeat << "}";
+  return j.str();
+}
+
+// The perceptual map's window (GetPerceptualMapRequest around_robot_m): how many of the map's
+// segments a local planner gets around the final pose, against the whole map it would get
+// without one.
+std::string PmapWindowJson(const epmap::mobile_mapping::MapsSnapshot& maps, double side_m,
+                           int repeat) {
+  if (maps.poses.empty()) return "null";
+  const Eigen::Vector2d at = maps.poses.back().T_world_base.translation();
+  const Eigen::AlignedBox2d box(at - Eigen::Vector2d::Constant(side_m / 2),
+                                at + Eigen::Vector2d::Constant(side_m / 2));
+  const auto& segments = maps.perceptual.segments;
+  std::vector<double> ms;
+  std::vector<epmap::perceptual_map::MapSegment> in;
+  for (int k = 0; k < repeat; ++k) {
+    const auto t0 = std::chrono::steady_clock::now();
+    in = epmap::perceptual_map::SegmentsInBox(segments, box);
+    ms.push_back(MsSince(t0));
+  }
+  std::ostringstream j;
+  j << "{\"side_m\":" << FormatFixed(side_m, 1) << ",\"segments\":" << in.size()
+    << ",\"select_ms_median\":" << FormatFixed(Median(ms), 3)
+    << ",\"baseline\":\"the whole perceptual map (GetPerceptualMap without a window)\""
+    << ",\"baseline_segments\":" << segments.size() << ",\"ratio_to_baseline\":"
+    << FormatFixed(segments.empty() ? 0.0 : double(in.size()) / segments.size(), 3)
     << ",\"repeat\":" << repeat << "}";
   return j.str();
 }
@@ -1268,6 +1296,7 @@ int RunCommand(int argc, char** argv) {
          "same key frames\",\"baseline_sgbm_ms_median\":"
       << FormatFixed(sg, 2) << ",\"ratio_to_baseline\":" << FormatFixed(med / sg, 3) << "}";
     j << ",\"grid_window\":" << GridWindowJson(maps, 8.0, 20);
+    j << ",\"pmap_window\":" << PmapWindowJson(maps, 8.0, 20);
     j << ",\"durable_state\":{\"bytes\":" << main.state_bytes
       << ",\"save_ms_median\":" << FormatFixed(Median(main.save_ms), 2)
       << ",\"restore_ms_median\":" << FormatFixed(Median(main.restore_ms), 2)

@@ -54,7 +54,9 @@ TEST(MapsBench, WritesTheMapsAndTheFigures) {
                           "\"round_trip_exact\":true",
                           "\"committed_snapshot\":{\"key_frames\":",
                           "\"grid_window\":{\"side_m\":8.0,\"cells\":",
-                          "\"baseline_cells\":"}) {
+                          "\"baseline_cells\":",
+                          "\"pmap_window\":{\"side_m\":8.0,\"segments\":",
+                          "\"baseline_segments\":"}) {
     EXPECT_NE(figures.find(key), std::string::npos) << key << " missing in " << figures;
   }
   EXPECT_EQ(figures.find("null"), std::string::npos) << figures;
