@@ -142,6 +142,8 @@ snapshot() {
     # What a local planner polls: the 8 m square around the robot.
     $BIN/epmapctl --server "$SERVER" grid --around-robot 8 --out "$OUT/grid_around_robot.png" \
       > /dev/null 2>&1 || true
+    $BIN/epmapctl --server "$SERVER" pmap --around-robot 8 --out "$OUT/pmap_around_robot.svg" \
+      > /dev/null 2>&1 || true
     $BIN/epmapctl --server "$SERVER" pose --json > "$OUT/pose.json" 2> /dev/null || true
   fi
   status

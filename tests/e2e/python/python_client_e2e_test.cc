@@ -126,6 +126,34 @@ TEST(PythonClientE2E, PlannerExampleReadsTheGridAheadOfAMobileBase) {
   EXPECT_GE(free_ahead, 1.5) << out;
   EXPECT_EQ(map["combined_layers"].as<uint32_t>(), grid.combined_layers());
 
+  // The perceptual map's segments in the 8 m square around the robot: the service's window of
+  // it, and its nearest segment no farther than the nearest true wall (a wall or furniture
+  // in front of it; the robot has panned around its room).
+  const YAML::Node near = map["walls_near"];
+  ASSERT_TRUE(near && near["segments"]) << out;
+  {
+    grpc::ClientContext pmap_context;
+    v1::GetPerceptualMapRequest request;
+    request.set_around_robot_m(8.0);
+    v1::PerceptualMap window;
+    ASSERT_TRUE(epmapd.stub().GetPerceptualMap(&pmap_context, request, &window).ok());
+    EXPECT_EQ(near["segments"].as<int>(), window.segments_size()) << out;
+    EXPECT_EQ(near["segments_in_map"].as<uint32_t>(), window.segments_in_map()) << out;
+  }
+  ASSERT_GT(near["segments"].as<int>(), 0) << out;
+  double to_nearest_wall = std::numeric_limits<double>::infinity();
+  for (const auto& [a, b] : walls) {
+    const Eigen::Vector2d d = b - a;
+    const double t = std::clamp((at - a).dot(d) / std::max(d.squaredNorm(), 1e-12), 0.0, 1.0);
+    to_nearest_wall = std::min(to_nearest_wall, (at - (a + t * d)).norm());
+  }
+  const double nearest = near["nearest_m"].as<double>();
+  std::printf(
+      "perceptual map: %d of %u segments in the 8 m window, the nearest %.2f m away "
+      "(the nearest true wall %.2f m)\n",
+      near["segments"].as<int>(), near["segments_in_map"].as<uint32_t>(), nearest, to_nearest_wall);
+  EXPECT_LE(nearest, to_nearest_wall + 0.3) << out;
+
   // A robot 0.5 m tall plans on the lowest band alone (0.10-0.70 m): the service's grid over
   // that band, and still never free through a wall.
   const auto [low_code, low_out] = RunPlanner(epmapd, work, {"--robot-height", "0.5"});
