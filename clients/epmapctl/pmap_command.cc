@@ -6,6 +6,7 @@
 // pose): {"stamp_ns","includes_open_stop","resumed_unconfirmed","segments_in_map","window",
 // "segments":[{"id","x1","y1","x2","y2","view_id","observations","kept"}],"path":[[x,y]],
 // "boundary":[[x,y]],"inner_boundary":[[x,y]],"views":[...]}; .svg a picture for people.
+
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
