@@ -40,8 +40,9 @@ Eigen::AlignedBox2d BoxAround(const Eigen::Vector2d& q, double radius) {
 // The path without repeated points (stops), as lines with their arc length, indexed by cell.
 struct PathLines {
   std::vector<Eigen::Vector2d> points;
-  std::vector<double> arc;  // arc length at each point
-  BoxGrid index;            // line i spans points[i], points[i + 1]
+  std::vector<double> arc;                 // arc length at each point
+  std::vector<Eigen::AlignedBox2d> boxes;  // of each line
+  BoxGrid index;                           // line i spans points[i], points[i + 1]
   double cell_m;
 
   PathLines(const std::vector<Eigen::Vector2d>& path, double index_cell_m)
@@ -54,7 +55,8 @@ struct PathLines {
       }
     }
     for (size_t i = 0; i < lines(); ++i) {
-      index.Add(static_cast<uint32_t>(i), BoxOf(points[i], points[i + 1]));
+      boxes.push_back(BoxOf(points[i], points[i + 1]));
+      index.Add(static_cast<uint32_t>(i), boxes.back());
     }
   }
   size_t lines() const { return points.size() < 2 ? 0 : points.size() - 1; }
@@ -75,26 +77,35 @@ struct PathLines {
   Projection Project(const Eigen::Vector2d& q) const {
     Projection best;
     if (!q.allFinite() || lines() == 0) return best;
-    // Squares of growing half-width r around q: a line outside the square is at least r away,
-    // so once the nearest line inside is nearer than r, no line outside can beat or tie it.
+    // Squares around q: a line outside a square of half-width r is at least r away, so once
+    // the nearest line inside is nearer than r, no line outside can beat or tie it. When the
+    // square holds lines but none that near, the next one is just wide enough to hold every
+    // line as near as the nearest found, which settles the search.
+    // A floor driven many times has dozens of path lines in every cell: squared distances while
+    // searching (the nearest line is the same), and a line whose box is farther than the nearest
+    // so far is not projected at all.
     std::vector<uint32_t> near;
-    for (double r = cell_m > 0 ? cell_m : 1.0;; r *= 2) {
+    for (double r = cell_m > 0 ? cell_m : 1.0;;) {
       const auto box = BoxAround(q, r);
       Near(box, &near);
       best = Projection{};
+      double best_d2 = std::numeric_limits<double>::infinity();
       for (const uint32_t i : near) {
+        if (boxes[i].squaredExteriorDistance(q) > best_d2 * (1 + 1e-9) + 1e-18) continue;
         const Eigen::Vector2d a = points[i];
         const Eigen::Vector2d d = points[i + 1] - a;
         const double t = std::clamp((q - a).dot(d) / d.squaredNorm(), 0.0, 1.0);
-        const double dist = (q - (a + t * d)).norm();
-        if (dist < best.distance || (dist == best.distance && i < best.line)) {
-          best.distance = dist;
+        const double d2 = (q - (a + t * d)).squaredNorm();
+        if (d2 < best_d2 || (d2 == best_d2 && i < best.line)) {
+          best_d2 = d2;
           best.line = i;
           best.arc = arc[i] + t * d.norm();
           best.side = Cross(d, q - a);
         }
       }
+      best.distance = std::sqrt(best_d2);
       if (best.distance < r || index.Covers(box)) return best;
+      r = std::isfinite(best.distance) ? best.distance * (1 + 1e-9) + 1e-12 : 2 * r;
     }
   }
 
@@ -196,10 +207,15 @@ Boundary ComputeBoundary(const std::vector<MapSegment>& segments,
   }
   samples.push_back(lines.points.back());
   BoxGrid placed_index(params.index_cell_m);
+  std::vector<Eigen::AlignedBox2d> placed_box;
   for (size_t k = 0; k < placed.size(); ++k) {
-    placed_index.Add(static_cast<uint32_t>(k), BoxOf(placed[k].segment->a, placed[k].segment->b));
+    placed_box.push_back(BoxOf(placed[k].segment->a, placed[k].segment->b));
+    placed_index.Add(static_cast<uint32_t>(k), placed_box.back());
   }
-  std::vector<std::pair<double, const MapSegment*>> near[2];
+  // Per side, the nearest objects found so far, ordered by (distance, object): the first
+  // per_side of all the objects within max_d in that order, as sorting them all would give.
+  using Nearest = std::pair<double, const MapSegment*>;
+  std::vector<Nearest> nearest[2];
   std::vector<uint32_t> near_placed;
   const size_t per_side = static_cast<size_t>(params.objects_per_side);
   const double max_d = params.max_distance_m;
@@ -207,28 +223,44 @@ Boundary ComputeBoundary(const std::vector<MapSegment>& segments,
     // Squares of growing half-width r around q: an object outside the square is at least r
     // away, so once each side has its nearest few nearer than r, no object outside can beat or
     // tie them. Where the map is dense (a floor driven many times) the first square settles
-    // most samples; an object within max_d has its box within the square of half-width max_d.
-    for (double r = params.index_cell_m > 0 ? std::min(params.index_cell_m, max_d) : max_d;;
-         r = std::min(2 * r, max_d)) {
-      near[0].clear();
-      near[1].clear();
+    // most samples; when both sides have their few but not all nearer than r, the next square
+    // is just wide enough to hold every object as near as they are. An object within max_d has
+    // its box within the square of half-width max_d.
+    for (double r = params.index_cell_m > 0 ? std::min(params.index_cell_m, max_d) : max_d;;) {
+      nearest[0].clear();
+      nearest[1].clear();
       placed_index.Query(BoxAround(q, r), &near_placed);
       for (const uint32_t k : near_placed) {
-        const Placed& p = placed[k];
-        const double d = PointSegmentDistance(q, p.segment->a, p.segment->b);
-        if (d <= max_d) near[p.inner ? 1 : 0].emplace_back(d, p.segment);
+        auto& side = nearest[placed[k].inner ? 1 : 0];
+        if (side.size() == per_side) {
+          // An object whose box is farther than the side's last kept one cannot displace it
+          // (its distance is at least the box's): most candidates of a dense map stop here,
+          // without their distance. The margin keeps rounding from dropping a tie.
+          const double worst = side.back().first;
+          if (placed_box[k].squaredExteriorDistance(q) > worst * worst * (1 + 1e-9) + 1e-18) {
+            continue;
+          }
+        }
+        const MapSegment* s = placed[k].segment;
+        const Nearest candidate{PointSegmentDistance(q, s->a, s->b), s};
+        if (!(candidate.first <= max_d)) continue;  // also a segment that is not finite
+        if (side.size() == per_side && !(candidate < side.back())) continue;
+        if (side.size() == per_side) side.pop_back();
+        side.insert(std::upper_bound(side.begin(), side.end(), candidate), candidate);
       }
-      const auto settled = [&](const std::vector<std::pair<double, const MapSegment*>>& side) {
-        return static_cast<size_t>(std::count_if(side.begin(), side.end(), [&](const auto& e) {
-                 return e.first < r;
-               })) >= per_side;
+      const auto settled = [&](const std::vector<Nearest>& side) {
+        return side.size() == per_side && side.back().first < r;
       };
-      if (r >= max_d || (settled(near[0]) && settled(near[1]))) break;
+      if (r >= max_d || (settled(nearest[0]) && settled(nearest[1]))) break;
+      const bool both_full = nearest[0].size() == per_side && nearest[1].size() == per_side;
+      r = std::min(
+          both_full
+              ? std::max(nearest[0].back().first, nearest[1].back().first) * (1 + 1e-9) + 1e-12
+              : 2 * r,
+          max_d);
     }
-    for (auto& side : near) {
-      const size_t n = std::min(side.size(), per_side);
-      std::partial_sort(side.begin(), side.begin() + static_cast<std::ptrdiff_t>(n), side.end());
-      for (size_t k = 0; k < n; ++k) kept.insert(side[k].second);
+    for (const auto& side : nearest) {
+      for (const auto& [d, s] : side) kept.insert(s);
     }
   }
 
