@@ -10,11 +10,19 @@
 // a large building), a view every metre, and at each view one 0.8 m wall segment 1.5 m to
 // either side with a few centimetres of scatter: about as many objects per metre as the
 // building scenario's perceptual map has. --revisits drives a 250 m floor again and again.
+//
+// --pmap FILE times the same on a perceptual map a run built (pmap.json of `epmap-bench maps`
+// or `epmapctl pmap --out map.json`: its segments and path), e.g. the building floor driven
+// four times (`epmap-sim record --scenario building --route rooms --passes 4`), where the
+// synthetic floor's regular walls say little about how real ones crowd the index's cells.
 
 #include <CLI/CLI.hpp>
 #include <chrono>
+#include <fstream>
 #include <iostream>
+#include <iterator>
 #include <random>
+#include <regex>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -58,6 +66,38 @@ Floor Serpentine(int floor_m, int passes) {
   return f;
 }
 
+// The segments and path of a pmap.json (see the top of this file). Only what this bench needs
+// is read: every {"id":..,"x1":..,"y1":..,"x2":..,"y2":..} object and the "path" array of
+// [x,y] pairs. Throws std::runtime_error naming the file when either is missing.
+Floor ReadPmapJson(const std::string& file) {
+  std::ifstream in(file);
+  if (!in) throw std::runtime_error("cannot read " + file);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string num = R"((-?[0-9.]+(?:[eE][-+]?[0-9]+)?))";
+  const std::regex segment("\\{\"id\":([0-9]+),\"x1\":" + num + ",\"y1\":" + num +
+                           ",\"x2\":" + num + ",\"y2\":" + num);
+  Floor f;
+  for (std::sregex_iterator it(text.begin(), text.end(), segment), end; it != end; ++it) {
+    pm::MapSegment s;
+    s.id = static_cast<uint32_t>(std::stoul((*it)[1]));
+    s.a = {std::stod((*it)[2]), std::stod((*it)[3])};
+    s.b = {std::stod((*it)[4]), std::stod((*it)[5])};
+    f.segments.push_back(s);
+  }
+  const size_t path_at = text.find("\"path\":[");
+  if (f.segments.empty() || path_at == std::string::npos) {
+    throw std::runtime_error(file + " holds no perceptual map (segments and path of pmap.json)");
+  }
+  const size_t path_end = text.find("]]", path_at);
+  const std::string path = text.substr(
+      path_at, path_end == std::string::npos ? std::string::npos : path_end + 2 - path_at);
+  const std::regex point("\\[" + num + "," + num + "\\]");
+  for (std::sregex_iterator it(path.begin(), path.end(), point), end; it != end; ++it) {
+    f.path.emplace_back(std::stod((*it)[1]), std::stod((*it)[2]));
+  }
+  return f;
+}
+
 bool Same(const pm::Boundary& a, const pm::Boundary& b) {
   return a.removed_on_path == b.removed_on_path && a.inner_ids == b.inner_ids &&
          a.outer_ids == b.outer_ids && a.inner == b.inner && a.outer == b.outer &&
@@ -76,6 +116,10 @@ int Run(int argc, char** argv) {
       ->delimiter(',');
   app.add_option("--repeat", repeat, "timed runs of each method per length (median reported)")
       ->check(CLI::Range(1, 1000));
+  std::vector<std::string> pmaps;
+  app.add_option("--pmap", pmaps,
+                 "also time these perceptual maps a run built (pmap.json: segments and path)")
+      ->check(CLI::ExistingFile);
   CLI11_PARSE(app, argc, argv);
   for (const int l : lengths) {
     if (l < 2 || l > 100000) {
@@ -91,11 +135,13 @@ int Run(int argc, char** argv) {
   }
   constexpr int kRevisitedFloorM = 250;
   struct Case {
-    int floor_m, passes;
+    int floor_m = 0, passes = 0;
+    std::string pmap;  // a run's map instead of a synthetic floor
   };
   std::vector<Case> cases;
-  for (const int l : lengths) cases.push_back({l, 1});
-  for (const int p : revisits) cases.push_back({kRevisitedFloorM, p});
+  for (const int l : lengths) cases.push_back({l, 1, {}});
+  for (const int p : revisits) cases.push_back({kRevisitedFloorM, p, {}});
+  for (const auto& file : pmaps) cases.push_back({0, 0, file});
   using epmap::bench::FormatFixed;
   std::ostringstream j;
   j << "{\"what\":\"paper 003 III-D redundancy removal and boundary, per call\""
@@ -103,7 +149,14 @@ int Run(int argc, char** argv) {
     << ",\"index_cell_m\":" << FormatFixed(pm::BoundaryParams{}.index_cell_m, 2) << ",\"runs\":[";
   bool all_same = true;
   for (size_t k = 0; k < cases.size(); ++k) {
-    const Floor floor = Serpentine(cases[k].floor_m, cases[k].passes);
+    Floor floor;
+    try {
+      floor = cases[k].pmap.empty() ? Serpentine(cases[k].floor_m, cases[k].passes)
+                                    : ReadPmapJson(cases[k].pmap);
+    } catch (const std::exception& e) {
+      std::cerr << "epmap-bench boundary: " << e.what() << "\n";
+      return 2;
+    }
     pm::BoundaryParams indexed, everything;
     everything.index_cell_m = 0;
     std::vector<double> indexed_ms, baseline_ms;
@@ -119,8 +172,14 @@ int Run(int argc, char** argv) {
     const bool same = Same(a, b);
     all_same = all_same && same;
     const double im = epmap::bench::Median(indexed_ms), bm = epmap::bench::Median(baseline_ms);
-    j << (k ? "," : "") << "{\"path_m\":" << cases[k].floor_m * cases[k].passes
-      << ",\"passes\":" << cases[k].passes << ",\"objects\":" << floor.segments.size()
+    j << (k ? "," : "") << "{";
+    if (cases[k].pmap.empty()) {
+      j << "\"path_m\":" << cases[k].floor_m * cases[k].passes << ",\"passes\":" << cases[k].passes;
+    } else {
+      j << "\"pmap\":" << epmap::bench::JsonQuote(cases[k].pmap)
+        << ",\"path_points\":" << floor.path.size();
+    }
+    j << ",\"objects\":" << floor.segments.size()
       << ",\"kept\":" << a.inner_ids.size() + a.outer_ids.size()
       << ",\"indexed_ms_median\":" << FormatFixed(im, 3)
       << ",\"baseline_ms_median\":" << FormatFixed(bm, 3)

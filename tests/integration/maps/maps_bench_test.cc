@@ -210,5 +210,45 @@ TEST(BoundaryBench, TimesTheIndexedBoundaryBesideComparingEverything) {
   EXPECT_NE(Slurp(dir / "err.txt").find("--lengths must be within"), std::string::npos);
 }
 
+// --pmap: the same timing on a map a run built (pmap.json's layout), every segment and path
+// point read; a file that holds no perceptual map is refused by name.
+TEST(BoundaryBench, TimesAPerceptualMapARunBuilt) {
+  const auto dir = testing::FreshTempDir("boundary-bench-pmap");
+  const auto bench = testing::BinDir() / "epmap-bench";
+  {
+    // A corridor: walls 1.5 m either side of an 11-point path, one object across the path.
+    std::ofstream f(dir / "pmap.json");
+    f << "{\"frame\":\"world\",\"segments\":[";
+    uint32_t id = 1;
+    for (int x = 0; x < 10; ++x) {
+      for (const double y : {-1.5, 1.5}) {
+        f << (id > 1 ? "," : "") << "{\"id\":" << id << ",\"x1\":" << x << ".0,\"y1\":" << y
+          << ",\"x2\":" << x + 1 << ".0,\"y2\":" << y << ",\"view\":1,\"observations\":1}";
+        ++id;
+      }
+    }
+    f << ",{\"id\":" << id << ",\"x1\":5.0,\"y1\":-0.5,\"x2\":5.0,\"y2\":5e-1}],\"path\":[";
+    for (int x = 0; x <= 10; ++x) f << (x ? "," : "") << "[" << x << ".0,-0.0]";
+    f << "],\"boundary\":[[0.0,1.5]]}";
+  }
+  const std::string cmd = bench.string() +
+                          " boundary --lengths 60 --revisits 1 --repeat 1 --pmap " +
+                          (dir / "pmap.json").string() + " > " + (dir / "boundary.json").string();
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  const std::string json = Slurp(dir / "boundary.json");
+  EXPECT_NE(json.find("\"path_points\":11,\"objects\":21,"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"all_same\":true"), std::string::npos) << json;
+  {
+    std::ofstream f(dir / "empty.json");
+    f << "{\"segments\":[],\"path\":[]}";
+  }
+  const std::string bad = bench.string() + " boundary --lengths 60 --revisits 1 --pmap " +
+                          (dir / "empty.json").string() + " > /dev/null 2> " +
+                          (dir / "err.txt").string();
+  EXPECT_NE(std::system(bad.c_str()), 0);
+  EXPECT_NE(Slurp(dir / "err.txt").find("holds no perceptual map"), std::string::npos)
+      << Slurp(dir / "err.txt");
+}
+
 }  // namespace
 }  // namespace epmap
