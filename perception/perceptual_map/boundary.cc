@@ -81,9 +81,9 @@ struct PathLines {
     // the nearest line inside is nearer than r, no line outside can beat or tie it. When the
     // square holds lines but none that near, the next one is just wide enough to hold every
     // line as near as the nearest found, which settles the search.
-    // A floor driven many times has dozens of path lines in every cell: squared distances while
-    // searching (the nearest line is the same), and a line whose box is farther than the nearest
-    // so far is not projected at all.
+    // A floor driven many times has dozens of path lines in every cell: a line whose box is
+    // farther than the nearest so far is not projected at all, and one that lies farther gets
+    // no square root.
     std::vector<uint32_t> near;
     for (double r = cell_m > 0 ? cell_m : 1.0;;) {
       const auto box = BoxAround(q, r);
@@ -96,14 +96,19 @@ struct PathLines {
         const Eigen::Vector2d d = points[i + 1] - a;
         const double t = std::clamp((q - a).dot(d) / d.squaredNorm(), 0.0, 1.0);
         const double d2 = (q - (a + t * d)).squaredNorm();
-        if (d2 < best_d2 || (d2 == best_d2 && i < best.line)) {
+        if (d2 > best_d2 * (1 + 1e-9) + 1e-18) continue;  // cannot beat or tie the nearest
+        // Ties are decided on the distance itself: a path driven back over itself has each
+        // line twice, the second reversed, and their squared distances may differ in the last
+        // bit where the distances do not; the first line wins, whatever the rounding.
+        const double dist = std::sqrt(d2);
+        if (dist < best.distance || (dist == best.distance && i < best.line)) {
           best_d2 = d2;
+          best.distance = dist;
           best.line = i;
           best.arc = arc[i] + t * d.norm();
           best.side = Cross(d, q - a);
         }
       }
-      best.distance = std::sqrt(best_d2);
       if (best.distance < r || index.Covers(box)) return best;
       r = std::isfinite(best.distance) ? best.distance * (1 + 1e-9) + 1e-12 : 2 * r;
     }
@@ -176,17 +181,26 @@ Boundary ComputeBoundary(const std::vector<MapSegment>& segments,
   // 2. Inner and outer: the side of the path each object lies on. Inner is the side the path
   // turns towards overall (the inside of a loop); for a straight path, the left.
   out.inner_is_left = lines.NetTurn() >= 0;
+  // Placing an object (its nearest path line) costs more than anything else here on a floor
+  // driven many times, and most objects are never among a path point's nearest: each object
+  // is placed when step 3 first needs its side.
   struct Placed {
     const MapSegment* segment;
-    bool inner;
-    double arc;
+    bool resolved = false;
+    bool inner = false;
+    double arc = 0;
   };
   std::vector<Placed> placed;
-  for (const MapSegment* s : candidates) {
-    const auto proj = lines.Project(s->a * 0.5 + s->b * 0.5);
-    const bool left = proj.side > 0;
-    placed.push_back({s, lines.lines() > 0 && left == out.inner_is_left, proj.arc});
-  }
+  for (const MapSegment* s : candidates) placed.push_back({s});
+  const auto resolve = [&](Placed& p) -> const Placed& {
+    if (!p.resolved) {
+      const auto proj = lines.Project(p.segment->a * 0.5 + p.segment->b * 0.5);
+      p.inner = (proj.side > 0) == out.inner_is_left;
+      p.arc = proj.arc;
+      p.resolved = true;
+    }
+    return p;
+  };
   if (lines.lines() == 0) {
     for (const auto& p : placed) out.outer_ids.push_back(p.segment->id);
     for (const auto& p : placed) {
@@ -231,7 +245,14 @@ Boundary ComputeBoundary(const std::vector<MapSegment>& segments,
       nearest[1].clear();
       placed_index.Query(BoxAround(q, r), &near_placed);
       for (const uint32_t k : near_placed) {
-        auto& side = nearest[placed[k].inner ? 1 : 0];
+        if (!placed[k].resolved && nearest[0].size() == per_side && nearest[1].size() == per_side) {
+          // Farther than both sides' last kept ones: its side does not matter.
+          const double worst = std::max(nearest[0].back().first, nearest[1].back().first);
+          if (placed_box[k].squaredExteriorDistance(q) > worst * worst * (1 + 1e-9) + 1e-18) {
+            continue;
+          }
+        }
+        auto& side = nearest[resolve(placed[k]).inner ? 1 : 0];
         if (side.size() == per_side) {
           // An object whose box is farther than the side's last kept one cannot displace it
           // (its distance is at least the box's): most candidates of a dense map stop here,
@@ -270,7 +291,7 @@ Boundary ComputeBoundary(const std::vector<MapSegment>& segments,
   // path passes at the same arc length go by id, so the order never depends on the sort.
   std::vector<Placed> ordered;
   for (const auto& p : placed) {
-    if (kept.count(p.segment)) ordered.push_back(p);
+    if (kept.count(p.segment)) ordered.push_back(p);  // resolved in step 3
   }
   std::sort(ordered.begin(), ordered.end(), [](const Placed& x, const Placed& y) {
     return x.arc != y.arc ? x.arc < y.arc : x.segment->id < y.segment->id;
