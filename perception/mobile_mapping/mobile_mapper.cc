@@ -443,7 +443,7 @@ bool MobileMapper::standing_at_stop() const {
 
 std::shared_ptr<const MapsSnapshot> MobileMapper::SnapshotWithOpenStop() const {
   if (!standing_at_stop()) return Snapshot();
-  occupancy::LayeredGrid grid = grid_;  // deep copies: the maps themselves stay as they are
+  occupancy::LayeredGrid grid = grid_;  // copies: the maps themselves stay as they are
   perceptual_map::PerceptualMapper perceptual = perceptual_;
   localisation::PoseCorrector poses = poses_;
   MapperCounters counters = counters_;
@@ -468,7 +468,7 @@ std::shared_ptr<const MapsSnapshot> MobileMapper::Snapshot() const {
     published_perceptual_revision_ = perceptual_.revision();
   }
   s->perceptual = *published_perceptual_;
-  s->grid = grid_;  // deep copy
+  s->grid = grid_;  // shares the cells until the mapper changes them (copy on write)
   s->poses = poses_.records();
   s->counters = counters_;
   s->resumed_unconfirmed = restore_unconfirmed_;

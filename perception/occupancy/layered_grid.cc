@@ -1,6 +1,7 @@
 #include "perception/occupancy/layered_grid.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -111,28 +112,35 @@ void PutCell(const Cell& cell, double unknown_below, uint8_t* occupancy, uint8_t
 
 LayeredGrid::LayeredGrid(const GridParams& params) : params_(params) {
   params_.Validate();
-  layers_.resize(static_cast<size_t>(layer_count()));
+  layers_ = std::make_shared<std::vector<Layer>>(static_cast<size_t>(layer_count()));
 }
 
-LayeredGrid::LayeredGrid(const LayeredGrid& other)
-    : params_(other.params_),
-      min_ix_(other.min_ix_),
-      min_iy_(other.min_iy_),
-      width_(other.width_),
-      height_(other.height_) {
-  layers_.resize(other.layers_.size());
-  for (size_t l = 0; l < layers_.size(); ++l) {
-    layers_[l].empty = other.layers_[l].empty.clone();
-    layers_[l].occupied = other.layers_[l].occupied.clone();
-    layers_[l].confidence = other.layers_[l].confidence.clone();
-    layers_[l].hits = other.layers_[l].hits.clone();
-    layers_[l].passes = other.layers_[l].passes.clone();
+LayeredGrid LayeredGrid::DeepCopy() const {
+  LayeredGrid copy = *this;
+  copy.MutableLayers();  // shared with this one: copies the cells
+  return copy;
+}
+
+std::vector<LayeredGrid::Layer>& LayeredGrid::MutableLayers() {
+  // Every other holder of the layers is a copy that counts, and no copy of this grid is made
+  // while it changes, so a count of one cannot rise before the writes. The fence orders them
+  // after the last reads of copies that were dropped (their release of the count).
+  if (layers_.use_count() > 1) {
+    auto own = std::make_shared<std::vector<Layer>>(layers_->size());
+    for (size_t l = 0; l < own->size(); ++l) {
+      const Layer& from = (*layers_)[l];
+      Layer& to = (*own)[l];
+      to.empty = from.empty.clone();
+      to.occupied = from.occupied.clone();
+      to.confidence = from.confidence.clone();
+      to.hits = from.hits.clone();
+      to.passes = from.passes.clone();
+    }
+    layers_ = std::move(own);
+  } else {
+    std::atomic_thread_fence(std::memory_order_acquire);
   }
-}
-
-LayeredGrid& LayeredGrid::operator=(const LayeredGrid& other) {
-  if (this != &other) *this = LayeredGrid(other);
-  return *this;
+  return *layers_;
 }
 
 void LayeredGrid::RestorePlanes(int64_t min_ix, int64_t min_iy, int width, int height,
@@ -140,8 +148,9 @@ void LayeredGrid::RestorePlanes(int64_t min_ix, int64_t min_iy, int width, int h
   const auto fail = [](const std::string& what) {
     throw std::invalid_argument("occupancy grid: saved cells do not fit: " + what);
   };
-  if (planes.size() != layers_.size()) {
-    fail(std::to_string(planes.size()) + " layers, the grid has " + std::to_string(layers_.size()));
+  if (planes.size() != layers_->size()) {
+    fail(std::to_string(planes.size()) + " layers, the grid has " +
+         std::to_string(layers_->size()));
   }
   if (width < 0 || height < 0 || (width == 0) != (height == 0)) {
     fail("size " + std::to_string(width) + " x " + std::to_string(height));
@@ -167,8 +176,8 @@ void LayeredGrid::RestorePlanes(int64_t min_ix, int64_t min_iy, int width, int h
       fail("hits and passes come together, in every layer or none");
     }
   }
-  layers_ = std::move(planes);
-  for (auto& l : layers_) {  // an empty grid keeps empty planes, as a new one has
+  layers_ = std::make_shared<std::vector<Layer>>(std::move(planes));  // copies keep theirs
+  for (auto& l : *layers_) {  // an empty grid keeps empty planes, as a new one has
     if (width == 0) l = Layer{};
   }
   min_ix_ = width == 0 ? 0 : min_ix;
@@ -226,7 +235,9 @@ void LayeredGrid::EnsureCovers(int64_t ix_lo, int64_t iy_lo, int64_t ix_hi, int6
     throw std::length_error("occupancy grid: growing to " + std::to_string(nw) + " x " +
                             std::to_string(nh) + " cells is beyond reason (a point far away?)");
   }
-  for (auto& layer : layers_) {
+  // New planes in any case: copies that share the old ones keep them.
+  auto grown_layers = std::make_shared<std::vector<Layer>>(*layers_);
+  for (auto& layer : *grown_layers) {
     for (cv::Mat* m :
          {&layer.empty, &layer.occupied, &layer.confidence, &layer.hits, &layer.passes}) {
       const bool counts = m == &layer.hits || m == &layer.passes;
@@ -239,6 +250,7 @@ void LayeredGrid::EnsureCovers(int64_t ix_lo, int64_t iy_lo, int64_t ix_hi, int6
       *m = grown;
     }
   }
+  layers_ = std::move(grown_layers);
   min_ix_ = nx0;
   min_iy_ = ny0;
   width_ = static_cast<int>(nw);
@@ -266,8 +278,9 @@ bool LayeredGrid::AddPoint(const Eigen::Vector3d& origin, const Eigen::Vector3d&
   EnsureCovers(std::min({sx, ex, bx}), std::min({sy, ey, by}), std::max({sx, ex, bx}),
                std::max({sy, ey, by}));
   const bool frequency = mp.membership == Membership::kRayFrequency;
-  if (frequency && layers_.front().hits.empty()) {
-    for (auto& layer : layers_) {
+  std::vector<Layer>& layers = MutableLayers();
+  if (frequency && layers.front().hits.empty()) {
+    for (auto& layer : layers) {
       layer.hits = cv::Mat::zeros(height_, width_, CV_32FC1);
       layer.passes = cv::Mat::zeros(height_, width_, CV_32FC1);
     }
@@ -286,7 +299,7 @@ bool LayeredGrid::AddPoint(const Eigen::Vector3d& origin, const Eigen::Vector3d&
     const int l = LayerOf(z);
     if (l >= 0) {
       const int c = static_cast<int>(ix - min_ix_), r = static_cast<int>(iy - min_iy_);
-      Layer& L = layers_[static_cast<size_t>(l)];
+      Layer& L = layers[static_cast<size_t>(l)];
       if (frequency) {
         float& passes = L.passes.at<float>(r, c);
         passes += static_cast<float>(weight);
@@ -301,7 +314,7 @@ bool LayeredGrid::AddPoint(const Eigen::Vector3d& origin, const Eigen::Vector3d&
   });
   const int l = LayerOf(point.z());
   if (l < 0) return true;
-  Layer& L = layers_[static_cast<size_t>(l)];
+  Layer& L = layers[static_cast<size_t>(l)];
   const auto hit = [&](int64_t ix, int64_t iy) {
     const int c = static_cast<int>(ix - min_ix_), r = static_cast<int>(iy - min_iy_);
     if (frequency) {
@@ -350,7 +363,7 @@ Cell LayeredGrid::At(int layer, int64_t ix, int64_t iy) const {
     return {};
   }
   const int c = static_cast<int>(ix - min_ix_), r = static_cast<int>(iy - min_iy_);
-  const Layer& L = layers_[static_cast<size_t>(layer)];
+  const Layer& L = (*layers_)[static_cast<size_t>(layer)];
   return {L.empty.at<float>(r, c), L.occupied.at<float>(r, c), L.confidence.at<float>(r, c)};
 }
 
@@ -391,7 +404,7 @@ int LayeredGrid::LayersBelow(double height_m) const {
 
 cv::Mat LayeredGrid::SyntheticMap() const {
   cv::Mat m(height_, width_, CV_32FC1, cv::Scalar(0));
-  for (const auto& L : layers_) {
+  for (const auto& L : *layers_) {
     if (L.occupied.empty()) continue;
     cv::Mat o_and_k;
     cv::min(L.occupied, L.confidence, o_and_k);  // O_l n K_l
@@ -403,7 +416,7 @@ cv::Mat LayeredGrid::SyntheticMap() const {
 void LayeredGrid::ReadRow(std::optional<int> layer, int first_layers, int r, int c0, int c1,
                           Cell* out) const {
   if (layer) {
-    const Layer& L = layers_[static_cast<size_t>(*layer)];
+    const Layer& L = (*layers_)[static_cast<size_t>(*layer)];
     if (L.empty.empty()) {  // a layer never allocated reads as never seen, as At() says
       for (int c = c0; c < c1; ++c) out[c - c0] = {};
       return;
@@ -417,7 +430,7 @@ void LayeredGrid::ReadRow(std::optional<int> layer, int first_layers, int r, int
   // O = max_l O_l, E = min(max_l E_l, 1 - O), K = max_l K_l (the combined map, see Combined).
   for (int c = c0; c < c1; ++c) out[c - c0] = {};
   for (int l = 0; l < first_layers; ++l) {
-    const Layer& L = layers_[static_cast<size_t>(l)];
+    const Layer& L = (*layers_)[static_cast<size_t>(l)];
     if (L.empty.empty()) continue;
     const float* e = L.empty.ptr<float>(r);
     const float* o = L.occupied.ptr<float>(r);
@@ -574,9 +587,10 @@ void LayeredGrid::MergeWeighted(const LayeredGrid& local, int shift_x, int shift
                local.min_iy_ + shift_y + local.height_ - 1);
   const int dc = static_cast<int>(local.min_ix_ + shift_x - min_ix_);
   const int dr = static_cast<int>(local.min_iy_ + shift_y - min_iy_);
-  for (size_t l = 0; l < layers_.size(); ++l) {
-    const Layer& S = local.layers_[l];
-    Layer& G = layers_[l];
+  std::vector<Layer>& layers = MutableLayers();
+  for (size_t l = 0; l < layers.size(); ++l) {
+    const Layer& S = (*local.layers_)[l];
+    Layer& G = layers[l];
     for (int r = 0; r < local.height_; ++r) {
       const float* se = S.empty.ptr<float>(r);
       const float* so = S.occupied.ptr<float>(r);

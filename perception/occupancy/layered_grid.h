@@ -13,6 +13,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <memory>
 #include <opencv2/core.hpp>
 #include <optional>
 #include <string>
@@ -113,12 +114,19 @@ CellWindow WindowOverBox(double resolution_m, double min_x, double min_y, double
 class LayeredGrid {
  public:
   explicit LayeredGrid(const GridParams& params = {});
-  // Copies are deep (cv::Mat alone would share the cells): a snapshot handed to readers never
-  // changes under them.
-  LayeredGrid(const LayeredGrid& other);
-  LayeredGrid& operator=(const LayeredGrid& other);
+  // Copies share the cells until one of them changes: the one that changes copies them first
+  // (copy on write), so a snapshot handed to readers never changes under them, and a snapshot
+  // taken while the map does not change (the base driving between stops) costs no copy.
+  // As for any value, one grid object is not copied or read while another thread changes it;
+  // copies of it may be read, copied and dropped on any thread meanwhile. A moved-from grid
+  // may only be assigned or destroyed.
+  LayeredGrid(const LayeredGrid& other) = default;
+  LayeredGrid& operator=(const LayeredGrid& other) = default;
   LayeredGrid(LayeredGrid&&) noexcept = default;
   LayeredGrid& operator=(LayeredGrid&&) noexcept = default;
+  // A copy with cells of its own from the start (what every copy cost before copy on write:
+  // epmap-bench maps times it as the snapshot's baseline).
+  LayeredGrid DeepCopy() const;
 
   // Adds one 3-D point seen from origin (both in the world frame, z = height above the floor).
   // range_sigma_m is the point's depth uncertainty (from the disparity noise). Returns false
@@ -193,7 +201,7 @@ class LayeredGrid {
     cv::Mat hits, passes;
   };
   // Every layer's cells, read-only (for saving a map: mobile_mapping's state).
-  const std::vector<LayerPlanes>& planes() const { return layers_; }
+  const std::vector<LayerPlanes>& planes() const { return *layers_; }
   // Replaces the cells with saved ones: lattice cell (min_ix + c, min_iy + r) is (c, r) of each
   // plane. Throws std::invalid_argument, leaving the grid as it was, when they do not fit this
   // grid: another layer count, planes not CV_32FC1 of height x width, memberships and
@@ -217,8 +225,11 @@ class LayeredGrid {
   GridExport ExportCellsIn(const CellWindow& window, std::optional<int> layer, int first_layers,
                            double unknown_below) const;
 
+  // The layers to change: this grid's own, copied first if a copy of the grid shares them.
+  std::vector<Layer>& MutableLayers();
+
   GridParams params_;
-  std::vector<Layer> layers_;
+  std::shared_ptr<std::vector<Layer>> layers_;  // shared by copies until one changes
   int64_t min_ix_ = 0, min_iy_ = 0;
   int width_ = 0, height_ = 0;
 };

@@ -204,11 +204,52 @@ TEST(LayeredGrid, GrowsAndKeepsWhatItHad) {
   EXPECT_FLOAT_EQ(g.At(1, 10, 0).occupied, cell.occupied);
   EXPECT_LE(g.origin().x(), -3.1);
   EXPECT_GT(g.At(1, -31, 30).occupied, 0.0F);
-  // Copies are deep: changing the original leaves the copy as it was.
+  // Copies are values: changing the original leaves the copy as it was.
   const LayeredGrid copy = g;
   g.AddPoint({0.05, 0.05, 1.0}, {1.05, 0.05, 1.0}, 0.01, {});
   EXPECT_FLOAT_EQ(copy.At(1, 10, 0).occupied, cell.occupied);
   EXPECT_GT(g.At(1, 10, 0).occupied, cell.occupied);
+}
+
+// A snapshot of an unchanged map costs no copy of its cells: copies share them until one of
+// the grids changes, and then only that one gets its own (by a point, a merge, growth or a
+// restore), whichever of the two it is.
+TEST(LayeredGrid, CopiesShareTheCellsUntilOneChanges) {
+  const occupancy::MeasurementParams mp;
+  LayeredGrid g;
+  g.AddPoint({0.05, 0.05, 1.0}, {1.05, 0.05, 1.0}, 0.01, mp);
+  const auto cells_of = [](const LayeredGrid& grid) {
+    return grid.planes()[1].occupied.ptr<float>();
+  };
+  const auto before = g.Export();
+  LayeredGrid snapshot = g;
+  EXPECT_EQ(cells_of(snapshot), cells_of(g));  // shared: no copy made
+  // The original changes: the snapshot keeps the cells as they were.
+  g.AddPoint({0.05, 0.05, 1.0}, {1.05, 0.35, 1.0}, 0.01, mp);
+  EXPECT_NE(cells_of(snapshot), cells_of(g));
+  EXPECT_EQ(snapshot.Export().occupancy, before.occupancy);
+  EXPECT_NE(g.Export().occupancy, before.occupancy);
+  // The copy changes (a merge, as an open stop's provisional map does): the original stays.
+  const auto g_now = g.Export();
+  LayeredGrid provisional = g;
+  provisional.MergeWeighted(snapshot, 3, 0);
+  EXPECT_EQ(g.Export().occupancy, g_now.occupancy);
+  EXPECT_NE(provisional.Export().occupancy, g_now.occupancy);
+  // Growth of a copy (a point far away) leaves the original's extent and cells.
+  LayeredGrid grown = g;
+  ASSERT_TRUE(grown.AddPoint({-4.0, 4.0, 1.0}, {-6.05, 6.05, 1.0}, 0.01, mp));
+  EXPECT_NE(grown.width(), g.width());
+  EXPECT_EQ(g.Export().occupancy, g_now.occupancy);
+  // A restore into a copy: the original keeps its cells.
+  LayeredGrid restored = g;
+  restored.RestorePlanes(snapshot.min_ix(), snapshot.min_iy(), snapshot.width(), snapshot.height(),
+                         snapshot.planes());
+  EXPECT_EQ(restored.Export().occupancy, before.occupancy);
+  EXPECT_EQ(g.Export().occupancy, g_now.occupancy);
+  // A grid nobody shares changes in place.
+  const float* own = cells_of(g);
+  g.AddPoint({0.05, 0.05, 1.0}, {1.05, 0.15, 1.0}, 0.01, mp);
+  EXPECT_EQ(cells_of(g), own);
 }
 
 // Walls seen from a few places: the map used as both the global map and, shifted, as the
