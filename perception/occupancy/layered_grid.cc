@@ -179,6 +179,12 @@ void LayeredGrid::RestorePlanes(int64_t min_ix, int64_t min_iy, int width, int h
   layers_ = std::make_shared<std::vector<Layer>>(std::move(planes));  // copies keep theirs
   for (auto& l : *layers_) {  // an empty grid keeps empty planes, as a new one has
     if (width == 0) l = Layer{};
+    // The grid changes its cells in place when it alone holds its layers: cells that another
+    // Mat still shows (planes() of another grid, say) are copied now. Freshly decoded planes,
+    // moved in, are not.
+    for (cv::Mat* m : {&l.empty, &l.occupied, &l.confidence, &l.hits, &l.passes}) {
+      if (m->u != nullptr && m->u->refcount > 1) *m = m->clone();
+    }
   }
   min_ix_ = width == 0 ? 0 : min_ix;
   min_iy_ = width == 0 ? 0 : min_iy;

@@ -246,6 +246,10 @@ TEST(LayeredGrid, CopiesShareTheCellsUntilOneChanges) {
                          snapshot.planes());
   EXPECT_EQ(restored.Export().occupancy, before.occupancy);
   EXPECT_EQ(g.Export().occupancy, g_now.occupancy);
+  // ... and the planes it was given stay the snapshot's: changing the restored grid leaves them.
+  EXPECT_NE(cells_of(restored), cells_of(snapshot));
+  restored.AddPoint({0.05, 0.05, 1.0}, {1.05, 0.65, 1.0}, 0.01, mp);
+  EXPECT_EQ(snapshot.Export().occupancy, before.occupancy);
   // A grid nobody shares changes in place.
   const float* own = cells_of(g);
   g.AddPoint({0.05, 0.05, 1.0}, {1.05, 0.15, 1.0}, 0.01, mp);
