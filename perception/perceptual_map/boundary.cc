@@ -244,24 +244,19 @@ Boundary ComputeBoundary(const std::vector<MapSegment>& segments,
       nearest[0].clear();
       nearest[1].clear();
       placed_index.Query(BoxAround(q, r), &near_placed);
+      // An object whose box is farther than a full side's last kept one cannot displace it
+      // (its distance is at least the box's): most candidates of a dense map stop here, without
+      // their distance, and if farther than both sides' last ones, without their side either.
+      // The margin keeps rounding from dropping a tie.
+      const auto beyond = [&](uint32_t k, const std::vector<Nearest>& side) {
+        if (side.size() < per_side) return false;
+        const double worst = side.back().first;
+        return placed_box[k].squaredExteriorDistance(q) > worst * worst * (1 + 1e-9) + 1e-18;
+      };
       for (const uint32_t k : near_placed) {
-        if (!placed[k].resolved && nearest[0].size() == per_side && nearest[1].size() == per_side) {
-          // Farther than both sides' last kept ones: its side does not matter.
-          const double worst = std::max(nearest[0].back().first, nearest[1].back().first);
-          if (placed_box[k].squaredExteriorDistance(q) > worst * worst * (1 + 1e-9) + 1e-18) {
-            continue;
-          }
-        }
+        if (!placed[k].resolved && beyond(k, nearest[0]) && beyond(k, nearest[1])) continue;
         auto& side = nearest[resolve(placed[k]).inner ? 1 : 0];
-        if (side.size() == per_side) {
-          // An object whose box is farther than the side's last kept one cannot displace it
-          // (its distance is at least the box's): most candidates of a dense map stop here,
-          // without their distance. The margin keeps rounding from dropping a tie.
-          const double worst = side.back().first;
-          if (placed_box[k].squaredExteriorDistance(q) > worst * worst * (1 + 1e-9) + 1e-18) {
-            continue;
-          }
-        }
+        if (beyond(k, side)) continue;
         const MapSegment* s = placed[k].segment;
         const Nearest candidate{PointSegmentDistance(q, s->a, s->b), s};
         if (!(candidate.first <= max_d)) continue;  // also a segment that is not finite
