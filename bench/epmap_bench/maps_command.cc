@@ -822,6 +822,8 @@ int RunCommand(int argc, char** argv) {
   double grid_resolution = 0;  // 0: the mapper's
   double min_shift = -1;
   double odometry_drift = -1;
+  double heading_step_deg = -1, heading_sigma_deg = -1, heading_drift_deg = -1,
+         heading_turn_drift = -1;
   size_t max_frames = 1'000'000;
   app.add_option("--dataset", dataset_path, "dataset folder with odometry0/")->required();
   app.add_option("--out", out_dir, "output folder (created)")->required();
@@ -866,6 +868,19 @@ int RunCommand(int argc, char** argv) {
   app.add_option("--odometry-drift", odometry_drift,
                  "map correlation: odometry's drift per metre driven, against which each "
                  "correlation shift is weighed (MobileMapperParams::odometry_drift_per_m)");
+  app.add_option("--heading-step", heading_step_deg,
+                 "map correlation: also try the local map turned by +-DEG about the stop and "
+                 "correct the heading by the better turn (MobileMapperParams::"
+                 "correlation_heading_step_rad; 0 = off; default: the mapper's)");
+  app.add_option("--heading-sigma", heading_sigma_deg,
+                 "map correlation: noise of one heading measurement, deg "
+                 "(MobileMapperParams::correlation_heading_sigma_rad; default: the mapper's)");
+  app.add_option("--heading-turn-drift", heading_turn_drift,
+                 "map correlation: the visual heading's drift per angle turned (0.003 = 0.3 %; "
+                 "MobileMapperParams::heading_drift_per_rad; default: the mapper's)");
+  app.add_option("--heading-drift", heading_drift_deg,
+                 "map correlation: the visual heading's drift, deg per metre driven "
+                 "(MobileMapperParams::heading_drift_rad_per_m; default: the mapper's)");
   app.add_option("--max-key-frames", max_frames, "stop after this many key frames");
   app.add_flag("--no-variants", no_variants,
                "skip the runs without heading correction / without any correction");
@@ -921,6 +936,11 @@ int RunCommand(int argc, char** argv) {
     if (grid_gap_min >= 0) params.measurement.empty_gap_min_cells = grid_gap_min;
     if (min_shift >= 0) params.correlation_min_shift_m = min_shift;
     if (odometry_drift >= 0) params.odometry_drift_per_m = odometry_drift;
+    if (heading_step_deg >= 0) params.correlation_heading_step_rad = heading_step_deg * M_PI / 180;
+    if (heading_sigma_deg > 0)
+      params.correlation_heading_sigma_rad = heading_sigma_deg * M_PI / 180;
+    if (heading_turn_drift >= 0) params.heading_drift_per_rad = heading_turn_drift;
+    if (heading_drift_deg >= 0) params.heading_drift_rad_per_m = heading_drift_deg * M_PI / 180;
 
     const MotionMasks masks = no_motion_mask ? MotionMasks{} : RunExpectedPerception(p);
     const RunResult main = Run(p, params, true, masks);
@@ -948,7 +968,8 @@ int RunCommand(int argc, char** argv) {
       std::ostringstream csv;
       csv << "#timestamp [ns],accepted,heading_source,odometry_dtheta [rad],visual_dtheta [rad],"
              "true_dtheta [rad],edge_points,features,tracked_pairs,inliers,stop_closed,"
-             "shift_x [m],shift_y [m],x [m],y [m],theta [rad],key_frame [ms],snapshot [ms]\n";
+             "shift_x [m],shift_y [m],heading_turn [rad],x [m],y [m],theta [rad],key_frame [ms],"
+             "snapshot [ms]\n";
       size_t k = 0;
       std::optional<double> prev_true;
       for (size_t i = 0; i < main.reports.size(); ++i) {
@@ -972,7 +993,8 @@ int RunCommand(int argc, char** argv) {
         csv << (true_theta && prev_true ? FormatFixed(WrapAngle(*true_theta - *prev_true), 6) : "")
             << "," << r.edge_points << "," << r.features << "," << r.tracked_pairs << ","
             << r.registration_inliers << "," << r.group_closed << ","
-            << FormatFixed(r.shift_m.x(), 3) << "," << FormatFixed(r.shift_m.y(), 3);
+            << FormatFixed(r.shift_m.x(), 3) << "," << FormatFixed(r.shift_m.y(), 3) << ","
+            << FormatFixed(r.heading_turn_rad, 6);
         if (r.accepted && k > 0) {
           const auto& T = poses[k - 1].T_world_base;
           csv << "," << FormatFixed(T.translation().x(), 4) << ","
@@ -1045,7 +1067,7 @@ int RunCommand(int argc, char** argv) {
       << ",\"visual_heading\":" << c.visual_heading
       << ",\"odometry_heading\":" << c.odometry_heading << ",\"registrations\":" << c.registrations
       << ",\"shifts_applied\":" << c.shifts_applied << ",\"shifts_refused\":" << c.shifts_refused
-      << ",\"rejected_by_reason\":{";
+      << ",\"heading_turns\":" << c.heading_turns << ",\"rejected_by_reason\":{";
     bool first = true;
     for (const auto& [reason, n] : c.rejected_by_reason) {
       j << (first ? "" : ",") << "\"" << reason << "\":" << n;

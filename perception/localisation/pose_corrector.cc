@@ -138,6 +138,21 @@ void PoseCorrector::ApplyTranslation(const Eigen::Vector2d& delta_world, size_t 
   }
 }
 
+void PoseCorrector::ApplyRotation(double dtheta, const Eigen::Vector2d& pivot_world,
+                                  size_t first_record) {
+  if (!std::isfinite(dtheta) || !pivot_world.allFinite()) {
+    throw std::invalid_argument("pose corrector: rotation correction is not finite");
+  }
+  const Eigen::Isometry2d turn = Eigen::Translation2d(pivot_world) * Eigen::Rotation2Dd(dtheta) *
+                                 Eigen::Translation2d(-pivot_world);
+  for (size_t i = first_record; i < records_.size(); ++i) {
+    const Eigen::Isometry2d T = turn * records_[i].T_world_base;
+    // Rebuilt from x, y, theta so that repeated turns keep the rotation exactly orthonormal.
+    records_[i].T_world_base =
+        MakePose(T.translation().x(), T.translation().y(), WrapAngle(HeadingOf(T)));
+  }
+}
+
 Eigen::Vector3d PoseCorrector::LatestDifference() const {
   const PoseRecord& r = latest();
   const Eigen::Vector2d dp = r.T_world_base.translation() - r.T_world_base_odometry.translation();

@@ -57,6 +57,9 @@ class PoseCorrector {
   // Adds a translation found by map correlation to the estimates from record first_record on
   // (the key frames of the stop that was registered); later key frames build on them.
   void ApplyTranslation(const Eigen::Vector2d& delta_world, size_t first_record);
+  // Turns the estimates from record first_record on by dtheta (counter-clockwise, rad) about
+  // the world point pivot: a heading correction found by map registration at a stop.
+  void ApplyRotation(double dtheta, const Eigen::Vector2d& pivot_world, size_t first_record);
 
   // Takes over saved records (a resumed map): stamps increasing, poses finite and rigid, or
   // std::invalid_argument and the corrector unchanged.

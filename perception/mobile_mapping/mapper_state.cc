@@ -1,6 +1,6 @@
 // MobileMapper::SaveState / RestoreState: the maps a service resumes after a restart.
 //
-// Format (version 1), little-endian, fixed-width fields in this order:
+// Format (version 2; version 1 is read too), little-endian, fixed-width fields in this order:
 //   "EPMAPMAP" u32 version
 //   camera: i32 width, height; f64 fx, fy, cx, cy, baseline
 //   lattice: f64 resolution; u64 n; f64 layer bounds[n]
@@ -11,6 +11,8 @@
 //         the planes (empty, occupied, confidence[, hits, passes]) as f32 rows
 //   counters (rejections by reason as u64-length strings), the correlation filter, the
 //   panning flag, the last stamp
+// Version 2 adds the heading turns to the counters and the heading variance to the filter
+// (MobileMapperParams::correlation_heading_step_rad); a version 1 state reads them as 0.
 //   "END."
 // A reader checks every length against what is left, so a truncated or foreign blob is a
 // reason, never a crash or a half-restored mapper.
@@ -32,7 +34,8 @@ static_assert(std::endian::native == std::endian::little,
 
 constexpr char kMagic[] = "EPMAPMAP";
 constexpr char kEnd[] = "END.";
-constexpr uint32_t kVersion = 1;
+constexpr uint32_t kVersion = 2;
+constexpr uint32_t kOldestVersion = 1;
 
 class Writer {
  public:
@@ -135,13 +138,15 @@ bool Near(double a, double b) {
 
 // The header every state starts with: the format, then the camera the maps were made with.
 // Throws std::runtime_error for another format or version.
-stereo::RectifiedGeometry ReadHeader(Reader& r) {
+stereo::RectifiedGeometry ReadHeader(Reader& r, uint32_t* version_out = nullptr) {
   r.Expect(std::string_view(kMagic, 8), "saved-maps header");
   const auto version = r.Get<uint32_t>();
-  if (version != kVersion) {
+  if (version < kOldestVersion || version > kVersion) {
     throw std::runtime_error("saved maps of format version " + std::to_string(version) +
-                             ", this is " + std::to_string(kVersion));
+                             ", this reads " + std::to_string(kOldestVersion) + " to " +
+                             std::to_string(kVersion));
   }
+  if (version_out) *version_out = version;
   stereo::RectifiedGeometry cam;
   cam.width = r.Get<int32_t>();
   cam.height = r.Get<int32_t>();
@@ -241,12 +246,14 @@ std::string MobileMapper::SaveState() const {
   }
   for (const uint64_t v :
        {c.groups, c.groups_too_short, c.views, c.views_without_objects, c.visual_heading,
-        c.odometry_heading, c.registrations, c.shifts_applied, c.shifts_refused}) {
+        c.odometry_heading, c.registrations, c.shifts_applied, c.shifts_refused, c.heading_turns}) {
     w.Put(v);
   }
   w.Vec(filter_.variance);
   w.Put<uint8_t>(filter_.last_stop.has_value());
   w.Vec(filter_.last_stop.value_or(Eigen::Vector2d::Zero()));
+  w.Put(filter_.heading_variance);
+  w.Put(filter_.last_stop_heading);
   w.Put<uint8_t>(seen_panning_stop_);
   w.Put(last_stamp_ns_);
   w.Raw(kEnd, 4);
@@ -274,7 +281,8 @@ bool MobileMapper::RestoreState(std::string_view bytes, std::string* reason) {
   }
   try {
     Reader r(bytes);
-    const stereo::RectifiedGeometry cam = ReadHeader(r);
+    uint32_t version = 0;
+    const stereo::RectifiedGeometry cam = ReadHeader(r, &version);
     if (cam.width != camera_.width || cam.height != camera_.height || !Near(cam.fx, camera_.fx) ||
         !Near(cam.fy, camera_.fy) || !Near(cam.cx, camera_.cx) || !Near(cam.cy, camera_.cy) ||
         !Near(cam.baseline_m, camera_.baseline_m)) {
@@ -382,16 +390,23 @@ bool MobileMapper::RestoreState(std::string_view bytes, std::string* reason) {
           &c.odometry_heading, &c.registrations, &c.shifts_applied, &c.shifts_refused}) {
       *v = r.Get<uint64_t>();
     }
+    if (version >= 2) c.heading_turns = r.Get<uint64_t>();
     PositionFilter filter;
     filter.variance = r.Vec();
     const bool has_last_stop = r.Get<uint8_t>() != 0;
     const Eigen::Vector2d last_stop = r.Vec();
     if (has_last_stop) filter.last_stop = last_stop;
+    if (version >= 2) {
+      filter.heading_variance = r.Get<double>();
+      filter.last_stop_heading = r.Get<double>();
+    }
     const bool seen_panning_stop = r.Get<uint8_t>() != 0;
     const auto last_stamp_ns = r.Get<int64_t>();
     r.Expect(kEnd, "end mark");
     if (!r.done()) return refuse("bytes follow the end mark");
-    if (!filter.variance.allFinite() || !last_stop.allFinite()) {
+    if (!filter.variance.allFinite() || !last_stop.allFinite() ||
+        !std::isfinite(filter.heading_variance) || filter.heading_variance < 0 ||
+        !std::isfinite(filter.last_stop_heading)) {
       return refuse("the saved correlation filter is not finite");
     }
 

@@ -83,6 +83,17 @@ void MobileMapperParams::Validate() const {
   if (!(correlation_search_m >= 0) || !(correlation_min_gain >= 0)) {
     throw std::invalid_argument("mobile mapper: correlation search and gain must be >= 0");
   }
+  if (!(correlation_heading_step_rad >= 0 && correlation_heading_step_rad < 0.2)) {
+    throw std::invalid_argument(
+        "mobile mapper: correlation_heading_step_rad must be in [0, 0.2) (0 = off)");
+  }
+  if (!(correlation_heading_sigma_rad > 0) || !std::isfinite(correlation_heading_sigma_rad) ||
+      !(heading_drift_rad_per_m >= 0) || !std::isfinite(heading_drift_rad_per_m) ||
+      !(heading_drift_per_rad >= 0) || !std::isfinite(heading_drift_per_rad)) {
+    throw std::invalid_argument(
+        "mobile mapper: correlation_heading_sigma_rad must be > 0, heading_drift_rad_per_m and "
+        "heading_drift_per_rad >= 0, all finite");
+  }
   if (!(head_still_rad >= 0))
     throw std::invalid_argument("mobile mapper: head_still_rad must be >= 0");
   if (view_min_key_frames < 0) {
@@ -354,27 +365,73 @@ void MobileMapper::MergeGroup(const Group& group, MapsState state, KeyFrameRepor
   const Eigen::Isometry3d T_world_base = To3d(state.poses.latest().T_world_base);
   Eigen::Isometry3d T_floor = Eigen::Isometry3d::Identity();
   T_floor.translation().z() = -params_.floor_z_in_base_m;  // world z = height above the floor
-  const Eigen::Isometry3d T = T_floor * T_world_base;
 
-  // Local occupancy map of the stop, in the world frame at the current pose estimate.
-  occupancy::LayeredGrid local(params_.grid);
-  for (const auto& fp : group.frames) {
-    const Eigen::Vector3d origin = T * fp.camera_in_base;
-    for (size_t i = 0; i < fp.points_base.size(); ++i) {
-      local.AddPoint(origin, T * fp.points_base[i], fp.sigmas[i], params_.measurement);
-    }
-  }
-  // Odometry may have drifted since the previous stop by a share of the distance driven.
   const Eigen::Vector2d stop_xy = T_world_base.translation().head<2>();
+  const double stop_heading = localisation::HeadingOf(state.poses.latest().T_world_base);
+  // Local occupancy map of the stop, in the world frame at the current pose estimate turned
+  // by `turn` (rad) about the stop.
+  const auto local_map = [&](double turn) {
+    Eigen::Isometry3d R = Eigen::Isometry3d::Identity();
+    R.linear() = Eigen::AngleAxisd(turn, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    const Eigen::Vector3d pivot(stop_xy.x(), stop_xy.y(), 0.0);
+    R.translation() = pivot - R.linear() * pivot;
+    const Eigen::Isometry3d T_turned = T_floor * R * T_world_base;
+    occupancy::LayeredGrid local(params_.grid);
+    for (const auto& fp : group.frames) {
+      const Eigen::Vector3d origin = T_turned * fp.camera_in_base;
+      for (size_t i = 0; i < fp.points_base.size(); ++i) {
+        local.AddPoint(origin, T_turned * fp.points_base[i], fp.sigmas[i], params_.measurement);
+      }
+    }
+    return local;
+  };
+  occupancy::LayeredGrid local = local_map(0.0);
+  // Odometry may have drifted since the previous stop by a share of the distance driven.
   if (state.filter.last_stop) {
     const double drift = params_.odometry_drift_per_m * (stop_xy - *state.filter.last_stop).norm();
     state.filter.variance += Eigen::Vector2d::Constant(drift * drift);
+    // The visual heading errs most while the base turns (a turn into a room).
+    const double turned =
+        std::abs(localisation::WrapAngle(stop_heading - state.filter.last_stop_heading));
+    const double heading_drift =
+        params_.heading_drift_rad_per_m * (stop_xy - *state.filter.last_stop).norm() +
+        params_.heading_drift_per_rad * turned;
+    state.filter.heading_variance += heading_drift * heading_drift;
   }
   state.filter.last_stop = stop_xy;
+  state.filter.last_stop_heading = stop_heading;
   int sx = 0, sy = 0;
   if (!state.grid.empty() && params_.map_correlation) {
     const auto reg = occupancy::CorrelateMaps(local, state.grid, params_.correlation_search_m);
     ++state.counters.registrations;
+    // Beyond paper 002: the heading against the global map (correlation_heading_step_rad).
+    // The peak score of the local map turned by -step, 0, +step; the parabola through them
+    // places the best turn, a measurement of the heading error weighed like the shift.
+    const double step = params_.correlation_heading_step_rad;
+    if (step > 0 && reg.local_cells >= params_.correlation_min_cells) {
+      const double s_minus =
+          occupancy::CorrelateMaps(local_map(-step), state.grid, params_.correlation_search_m)
+              .score;
+      const double s_plus =
+          occupancy::CorrelateMaps(local_map(step), state.grid, params_.correlation_search_m).score;
+      const double curvature = 2.0 * reg.score - s_minus - s_plus;
+      // A flat score (a corridor seen along its walls, a single wall) fixes no heading.
+      if (reg.score > 0 && curvature / reg.score >= params_.correlation_min_sharpness) {
+        const double measured =
+            std::clamp(0.5 * step * (s_plus - s_minus) / curvature, -step, step);
+        const double p = state.filter.heading_variance;
+        const double r =
+            params_.correlation_heading_sigma_rad * params_.correlation_heading_sigma_rad;
+        const double gain = p / (p + r);
+        state.filter.heading_variance = (1.0 - gain) * p;
+        const double turn = gain * measured;
+        state.poses.ApplyRotation(turn, stop_xy, group.first_record);
+        report->heading_turn_rad = turn;
+        ++state.counters.heading_turns;
+        // The turn is a fraction of a step: the local map is merged as built (its far walls
+        // move by under a millimetre per metre of range).
+      }
+    }
     const int border =
         static_cast<int>(std::ceil(params_.correlation_search_m / state.grid.resolution()));
     const bool on_border = std::abs(reg.dx_cells) >= border || std::abs(reg.dy_cells) >= border;

@@ -161,6 +161,22 @@ struct MobileMapperParams {
   // a cell (3 cm on the default 0.1 m lattice), so it scales with grid.resolution_m.
   double correlation_sigma_cells = 0.3;
   double odometry_drift_per_m = 0.02;  // 0: every shift taken whole (paper 002)
+  // Beyond paper 002, which correlates over x and y only and takes the heading from vision:
+  // the visual heading is integrated key frame by key frame, so it drifts without bound (rooms
+  // route, 0.2 deg after one pass, 1.3 after four, 3 after twelve), and a local map turned by
+  // the error correlates with the global one a cell off at its far walls: a long run's grid
+  // smears. Each registration also scores the local map turned by -step and +step about the
+  // stop; the parabola through the three peak scores measures the heading error (noise
+  // correlation_heading_sigma_rad), weighed by a Kalman filter against how far the heading can
+  // have drifted since the last stop (heading_drift_rad_per_m * metres driven +
+  // heading_drift_per_rad * the angle turned: the visual heading errs most in turns, about
+  // 0.2 deg per turn into a room), and that share turns the stop's poses and all later ones.
+  // 0: off (paper 002). Rooms route driven twelve times (750 m): final heading error 3.5 ->
+  // 0.4 deg, grid IoU 0.16 -> 0.30; one pass unchanged (EXPERIMENTS.md, thirty-sixth session).
+  double correlation_heading_step_rad = 0.0087;  // 0.5 deg
+  double correlation_heading_sigma_rad = 0.005;  // 0.3 deg
+  double heading_drift_rad_per_m = 0.0002;       // 0.01 deg per metre
+  double heading_drift_per_rad = 0.003;          // 0.3 % of the angle turned
 
   // Groups of fewer key frames are not views (2+: only panning stops make views; 1: every
   // key frame where the base stands is a view, for a robot that never stops to pan; 0:
@@ -197,6 +213,8 @@ struct KeyFrameReport {
   bool map_expanded = false;  // the perceptual map grew
   bool shifted = false;       // correlation moved the pose
   Eigen::Vector2d shift_m = Eigen::Vector2d::Zero();
+  double heading_turn_rad =
+      0;  // the registration turned the heading (correlation_heading_step_rad)
   // Set when this was the first key frame after RestoreState and it did not continue the
   // saved run (why): the restored maps were dropped and this key frame started new ones.
   std::optional<std::string> restored_maps_dropped;
@@ -215,6 +233,7 @@ struct MapperCounters {
   uint64_t registrations = 0;     // local maps correlated with the global one
   uint64_t shifts_applied = 0;
   uint64_t shifts_refused = 0;  // peak on the search border or implausibly far
+  uint64_t heading_turns = 0;   // stops whose heading the registration turned
 };
 
 // What readers get: immutable once built.
@@ -303,6 +322,8 @@ class MobileMapper {
   struct PositionFilter {
     Eigen::Vector2d variance = Eigen::Vector2d::Zero();
     std::optional<Eigen::Vector2d> last_stop;
+    double heading_variance = 0;  // of the heading error (correlation_heading_step_rad)
+    double last_stop_heading = 0;
   };
   // What closing a stop changes: the maps, the poses (registration) and the counters.
   struct MapsState {

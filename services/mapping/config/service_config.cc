@@ -173,6 +173,7 @@ void Apply(const YAML::Node& root, ServiceConfig& c) {
     s.Get("visual_heading", c.maps.visual_heading);
     s.Get("map_correlation", c.maps.map_correlation);
     s.Get("odometry_drift_per_m", c.maps.odometry_drift_per_m);
+    s.Get("heading_registration_step_deg", c.maps.heading_registration_step_deg);
     s.Get("grid_resolution_m", c.maps.grid_resolution_m);
     s.Get("place_views_by_pose", c.maps.place_views_by_pose);
     s.Get("view_min_key_frames", c.maps.view_min_key_frames);
@@ -271,6 +272,9 @@ void ServiceConfig::Validate() const {
     if (m.view_min_key_frames < 0) bad("maps.view_min_key_frames must be >= 0 (0 = automatic)");
     if (!(m.odometry_drift_per_m >= 0) || !std::isfinite(m.odometry_drift_per_m)) {
       bad("maps.odometry_drift_per_m must be >= 0 and finite (0 = every shift taken whole)");
+    }
+    if (!(m.heading_registration_step_deg >= 0 && m.heading_registration_step_deg <= 5)) {
+      bad("maps.heading_registration_step_deg must be between 0 (off) and 5 degrees");
     }
     // Finer cells multiply the ray traversal and the memory; coarser ones hide doorways.
     if (!(m.grid_resolution_m >= 0.02 && m.grid_resolution_m <= 1.0)) {
@@ -442,6 +446,8 @@ std::string ToYaml(const ServiceConfig& c) {
   out << YAML::Key << "visual_heading" << YAML::Value << c.maps.visual_heading;
   out << YAML::Key << "map_correlation" << YAML::Value << c.maps.map_correlation;
   out << YAML::Key << "odometry_drift_per_m" << YAML::Value << c.maps.odometry_drift_per_m;
+  out << YAML::Key << "heading_registration_step_deg" << YAML::Value
+      << c.maps.heading_registration_step_deg;
   out << YAML::Key << "grid_resolution_m" << YAML::Value << c.maps.grid_resolution_m;
   out << YAML::Key << "place_views_by_pose" << YAML::Value << c.maps.place_views_by_pose;
   out << YAML::Key << "view_min_key_frames" << YAML::Value << c.maps.view_min_key_frames;

@@ -71,6 +71,11 @@ struct MapsSettings {
   // against it (mobile_mapping::MobileMapperParams::odometry_drift_per_m); 0 takes every
   // shift whole, as paper 002 does.
   double odometry_drift_per_m = 0.02;
+  // Beyond paper 002: at each stop the heading is also registered against the global map, the
+  // local map turned by +-this angle (mobile_mapping::MobileMapperParams::
+  // correlation_heading_step_rad); it keeps the visual heading from drifting over long runs.
+  // 0: off (paper 002, heading from vision alone).
+  double heading_registration_step_deg = 0.5;
   // Cell size of the occupancy grid (occupancy::GridParams::resolution_m). 0.1 m is about the
   // rig's depth noise at 3-4 m; 0.125-0.2 m cells scored no better against the building's
   // walls on all four runs (perception/mobile_mapping/EXPERIMENTS.md).

@@ -7,6 +7,7 @@
 #include <spdlog/spdlog.h>
 
 #include <cmath>
+#include <numbers>
 
 #include "services/mapping/pipeline/pipeline.h"
 #include "services/mapping/pipeline/rectified_camera.h"
@@ -23,6 +24,7 @@ mobile_mapping::MobileMapperParams MakeMapperParams(
   p.visual_heading = s.visual_heading;
   p.map_correlation = s.map_correlation;
   p.odometry_drift_per_m = s.odometry_drift_per_m;
+  p.correlation_heading_step_rad = s.heading_registration_step_deg * std::numbers::pi / 180.0;
   p.grid.resolution_m = s.grid_resolution_m;
   p.perceptual.place_by_pose = s.place_views_by_pose;
   p.view_min_key_frames = s.view_min_key_frames;

@@ -52,5 +52,28 @@ TEST(PoseCorrector, TranslationCorrectionAndBadInput) {
   EXPECT_EQ(pc.records().size(), 3u);
 }
 
+TEST(PoseCorrector, RotationCorrectionTurnsTheStopAndEverythingAfterIt) {
+  localisation::PoseCorrector pc;
+  pc.Add(1, MakePose(0, 0, 0), std::nullopt);
+  pc.Add(2, MakePose(1, 0, 0), 0.0);
+  pc.Add(3, MakePose(1, 0, 0), 0.0);
+  // Turned by 90 degrees about (1, 0), the stop's position: it stays, its heading turns.
+  pc.ApplyRotation(90 * kDeg, {1.0, 0.0}, 1);
+  EXPECT_NEAR(localisation::HeadingOf(pc.records()[0].T_world_base), 0.0, 1e-12);
+  EXPECT_NEAR(pc.records()[1].T_world_base.translation().x(), 1.0, 1e-12);
+  EXPECT_NEAR(localisation::HeadingOf(pc.records()[2].T_world_base), 90 * kDeg, 1e-12);
+  // Later key frames build on the turned heading: 1 m ahead is now along +y.
+  const auto& r = pc.Add(4, MakePose(2, 0, 0), 0.0);
+  EXPECT_NEAR(r.T_world_base.translation().x(), 1.0, 1e-9);
+  EXPECT_NEAR(r.T_world_base.translation().y(), 1.0, 1e-9);
+  // About another pivot the positions move on the circle around it.
+  pc.ApplyRotation(-90 * kDeg, {0.0, 0.0}, 3);
+  EXPECT_NEAR(pc.records()[3].T_world_base.translation().x(), 1.0, 1e-9);
+  EXPECT_NEAR(pc.records()[3].T_world_base.translation().y(), -1.0, 1e-9);
+  EXPECT_NEAR(localisation::HeadingOf(pc.records()[3].T_world_base), 0.0, 1e-12);
+  EXPECT_THROW(pc.ApplyRotation(std::nan(""), {0.0, 0.0}, 0), std::invalid_argument);
+  EXPECT_NEAR(pc.records()[3].T_world_base.translation().y(), -1.0, 1e-9);  // unchanged
+}
+
 }  // namespace
 }  // namespace epmap

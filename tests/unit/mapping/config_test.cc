@@ -84,6 +84,16 @@ TEST(ServiceConfig, MapsSectionIsReadAndChecked) {
   ServiceConfig e;
   e.maps.odometry_drift_per_m = -0.01;
   ExpectRefusedNaming(e, "maps.odometry_drift_per_m");
+  ServiceConfig off;
+  EXPECT_EQ(off.maps.heading_registration_step_deg, 0.5);
+  mapping::ApplyYaml("maps:\n  heading_registration_step_deg: 0\n", off);
+  EXPECT_EQ(off.maps.heading_registration_step_deg, 0.0);
+  EXPECT_NO_THROW(off.Validate());
+  for (const double bad : {-0.5, 6.0, std::nan("")}) {
+    ServiceConfig h;
+    h.maps.heading_registration_step_deg = bad;
+    ExpectRefusedNaming(h, "maps.heading_registration_step_deg");
+  }
   ServiceConfig fine;
   mapping::ApplyYaml("maps:\n  grid_resolution_m: 0.05\n", fine);
   EXPECT_DOUBLE_EQ(fine.maps.grid_resolution_m, 0.05);
