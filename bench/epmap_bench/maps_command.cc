@@ -1264,6 +1264,8 @@ int RunCommand(int argc, char** argv) {
         auto vp = params;
         vp.visual_heading = var.heading;
         vp.map_correlation = var.correlation;
+        // Without heading correction means from neither the images nor the map.
+        if (!var.heading) vp.correlation_heading_step_rad = 0;
         if (var.other_placement) vp.perceptual.place_by_pose = !by_pose;
         const RunResult r = Run(p, vp, false, masks);
         const auto& rl = r.maps->poses.back();

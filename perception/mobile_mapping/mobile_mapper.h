@@ -15,6 +15,7 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <numbers>
 #include <opencv2/core.hpp>
 #include <optional>
 #include <string>
@@ -173,7 +174,7 @@ struct MobileMapperParams {
   // 0.2 deg per turn into a room), and that share turns the stop's poses and all later ones.
   // 0: off (paper 002). Rooms route driven twelve times (750 m): final heading error 3.5 ->
   // 0.4 deg, grid IoU 0.16 -> 0.30; one pass unchanged (EXPERIMENTS.md, thirty-sixth session).
-  double correlation_heading_step_rad = 0.0087;  // 0.5 deg
+  double correlation_heading_step_rad = 0.5 * std::numbers::pi / 180.0;
   double correlation_heading_sigma_rad = 0.005;  // 0.3 deg
   double heading_drift_rad_per_m = 0.0002;       // 0.01 deg per metre
   double heading_drift_per_rad = 0.003;          // 0.3 % of the angle turned

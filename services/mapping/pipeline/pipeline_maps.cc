@@ -254,6 +254,7 @@ void Pipeline::RunMaps(const StereoFrame& frame, const stereo::Rectifier& rectif
   if (report.edge_points == 0) events_.Increment("maps_key_frame_without_edges");
   if (report.view_skipped) events_.Increment("maps_view_without_objects");
   if (report.shifted) events_.Increment("maps_correlation_shifts");
+  if (report.heading_turn_rad != 0) events_.Increment("maps_heading_turns");
   if (!key_frame.moving.empty()) events_.Increment("maps_key_frame_motion_masked");
   stage_ms_.Add("maps.key_frame",
                 std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
