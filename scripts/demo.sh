@@ -180,7 +180,7 @@ echo "unexpected now: $(sed -n 2p "$OUT/unexpected.txt" 2>/dev/null)"
 echo "frames with something moving on its own: $(wc -l < "$OUT/unexpected_events.jsonl") (JSON lines in $OUT/unexpected_events.jsonl)"
 if [ "$SCENARIO" = building ]; then
   echo
-  echo "maps events: $(grep -E '^ +(maps_key_frames|maps_correlation_shifts|maps_key_frame_motion_masked|ros_map_published|ros_perceptual_map_published|ros_tf_published) ' \
+  echo "maps events: $(grep -E '^ +(maps_key_frames|maps_correlation_shifts|maps_heading_turns|maps_key_frame_motion_masked|ros_map_published|ros_perceptual_map_published|ros_tf_published) ' \
     "$OUT/status.txt" | awk '{printf "%s%s %s", sep, $1, $2; sep=", "}')"
   echo "pose (odometry, corrected, difference): $(tr -d '\n ' < "$OUT/pose.json" 2>/dev/null)"
   # The perceptual map as GetPerceptualMap served it, and what a planner client reads of the
