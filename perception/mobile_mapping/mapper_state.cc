@@ -11,9 +11,10 @@
 //         the planes (empty, occupied, confidence[, hits, passes]) as f32 rows
 //   counters (rejections by reason as u64-length strings), the correlation filter, the
 //   panning flag, the last stamp
-// Version 2 adds the heading turns to the counters and the heading variance to the filter
-// (MobileMapperParams::correlation_heading_step_rad); a version 1 state reads them as 0.
 //   "END."
+// Version 2 adds the heading turns after the counters and the heading filter (variance, the
+// last stop's heading) after the correlation filter (MobileMapperParams::
+// correlation_heading_step_rad); a version 1 state reads them as 0.
 // A reader checks every length against what is left, so a truncated or foreign blob is a
 // reason, never a crash or a half-restored mapper.
 

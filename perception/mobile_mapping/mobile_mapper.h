@@ -173,7 +173,7 @@ struct MobileMapperParams {
   // heading_drift_per_rad * the angle turned: the visual heading errs most in turns, about
   // 0.2 deg per turn into a room), and that share turns the stop's poses and all later ones.
   // 0: off (paper 002). Rooms route driven twelve times (750 m): final heading error 3.5 ->
-  // 0.4 deg, grid IoU 0.16 -> 0.30; one pass unchanged (EXPERIMENTS.md, thirty-sixth session).
+  // 0.4 deg, grid IoU 0.16 -> 0.30; one pass within its noise (EXPERIMENTS.md, 36th session).
   double correlation_heading_step_rad = 0.5 * std::numbers::pi / 180.0;
   double correlation_heading_sigma_rad = 0.005;  // 0.3 deg
   double heading_drift_rad_per_m = 0.0002;       // 0.01 deg per metre
@@ -214,8 +214,8 @@ struct KeyFrameReport {
   bool map_expanded = false;  // the perceptual map grew
   bool shifted = false;       // correlation moved the pose
   Eigen::Vector2d shift_m = Eigen::Vector2d::Zero();
-  double heading_turn_rad =
-      0;  // the registration turned the heading (correlation_heading_step_rad)
+  // The registration turned the heading by this (correlation_heading_step_rad).
+  double heading_turn_rad = 0;
   // Set when this was the first key frame after RestoreState and it did not continue the
   // saved run (why): the restored maps were dropped and this key frame started new ones.
   std::optional<std::string> restored_maps_dropped;
