@@ -388,14 +388,14 @@ void MobileMapper::MergeGroup(const Group& group, MapsState state, KeyFrameRepor
   occupancy::LayeredGrid local = local_map(0.0);
   // Odometry may have drifted since the previous stop by a share of the distance driven.
   if (state.filter.last_stop) {
-    const double drift = params_.odometry_drift_per_m * (stop_xy - *state.filter.last_stop).norm();
+    const double driven = (stop_xy - *state.filter.last_stop).norm();
+    const double drift = params_.odometry_drift_per_m * driven;
     state.filter.variance += Eigen::Vector2d::Constant(drift * drift);
     // The visual heading errs most while the base turns (a turn into a room).
     const double turned =
         std::abs(localisation::WrapAngle(stop_heading - state.filter.last_stop_heading));
     const double heading_drift =
-        params_.heading_drift_rad_per_m * (stop_xy - *state.filter.last_stop).norm() +
-        params_.heading_drift_per_rad * turned;
+        params_.heading_drift_rad_per_m * driven + params_.heading_drift_per_rad * turned;
     state.filter.heading_variance += heading_drift * heading_drift;
   }
   state.filter.last_stop = stop_xy;

@@ -17,6 +17,15 @@ std::string Slurp(const std::filesystem::path& p) {
   return s.str();
 }
 
+// Runs `epmap-bench ARGS`, which must fail, and returns what it wrote to stderr (the reason).
+std::string RefusalOf(const std::string& args, const std::filesystem::path& dir) {
+  const auto err = dir / "refusal.txt";
+  const std::string cmd =
+      (testing::BinDir() / "epmap-bench").string() + " " + args + " > /dev/null 2> " + err.string();
+  EXPECT_NE(std::system(cmd.c_str()), 0) << cmd;
+  return Slurp(err);
+}
+
 // `epmap-bench maps` end to end on a short synthetic run written in the dataset layout:
 // every output is there, in its documented shape, and the figures are computed.
 TEST(MapsBench, WritesTheMapsAndTheFigures) {
@@ -169,21 +178,15 @@ TEST(EdgesBench, ScoresEdgeDisparitiesAgainstTheTruth) {
   const std::string json5 = Slurp(dir / "edges5.json");
   EXPECT_GT(matched(json5), 0) << json5;
   EXPECT_LT(matched(json5), matched(json)) << json5;
-  const std::string no_range = bench.string() + " edges --max-range 0 --dataset " +
-                               (dir / "data").string() + " > /dev/null 2> " +
-                               (dir / "err0.txt").string();
-  EXPECT_NE(std::system(no_range.c_str()), 0);
-  EXPECT_NE(Slurp(dir / "err0.txt").find("max_range_m must be > 0"), std::string::npos)
-      << Slurp(dir / "err0.txt");
+  const std::string no_range =
+      RefusalOf("edges --max-range 0 --dataset " + (dir / "data").string(), dir);
+  EXPECT_NE(no_range.find("max_range_m must be > 0"), std::string::npos) << no_range;
 
   // The planar test world has no true disparity: a clear error.
   testing::WriteRunDataset(testing::PlanarWorld(testing::RoomWalls()),
                            testing::SimulateRun({{1.0, 1.0}, {2.0, 1.0}}, 0.0, {}), dir / "plain");
-  const std::string bad = bench.string() + " edges --dataset " + (dir / "plain").string() +
-                          " > /dev/null 2> " + (dir / "err.txt").string();
-  EXPECT_NE(std::system(bad.c_str()), 0);
-  EXPECT_NE(Slurp(dir / "err.txt").find("no gt_disparity0"), std::string::npos)
-      << Slurp(dir / "err.txt");
+  const std::string bad = RefusalOf("edges --dataset " + (dir / "plain").string(), dir);
+  EXPECT_NE(bad.find("no gt_disparity0"), std::string::npos) << bad;
   std::filesystem::remove_all(dir);
 }
 
@@ -204,10 +207,8 @@ TEST(BoundaryBench, TimesTheIndexedBoundaryBesideComparingEverything) {
   }
   EXPECT_EQ(json.find("\"same_boundary\":false"), std::string::npos) << json;
   EXPECT_EQ(json.find("null"), std::string::npos) << json;
-  const std::string bad =
-      bench.string() + " boundary --lengths 1 > /dev/null 2> " + (dir / "err.txt").string();
-  EXPECT_NE(std::system(bad.c_str()), 0);
-  EXPECT_NE(Slurp(dir / "err.txt").find("--lengths must be within"), std::string::npos);
+  const std::string bad = RefusalOf("boundary --lengths 1", dir);
+  EXPECT_NE(bad.find("--lengths must be within"), std::string::npos) << bad;
 }
 
 // --pmap: the same timing on a map a run built (pmap.json's layout), every segment and path
@@ -242,12 +243,9 @@ TEST(BoundaryBench, TimesAPerceptualMapARunBuilt) {
     std::ofstream f(dir / "empty.json");
     f << "{\"segments\":[],\"path\":[]}";
   }
-  const std::string bad = bench.string() + " boundary --lengths 60 --revisits 1 --pmap " +
-                          (dir / "empty.json").string() + " > /dev/null 2> " +
-                          (dir / "err.txt").string();
-  EXPECT_NE(std::system(bad.c_str()), 0);
-  EXPECT_NE(Slurp(dir / "err.txt").find("holds no perceptual map"), std::string::npos)
-      << Slurp(dir / "err.txt");
+  const std::string bad =
+      RefusalOf("boundary --lengths 60 --revisits 1 --pmap " + (dir / "empty.json").string(), dir);
+  EXPECT_NE(bad.find("holds no perceptual map"), std::string::npos) << bad;
 }
 
 }  // namespace
