@@ -498,6 +498,26 @@ bool MobileMapper::standing_at_stop() const {
          static_cast<int>(group_.frames.size()) >= std::max(2, MinKeyFramesForView());
 }
 
+PerceptualMapOnRead::PerceptualMapOnRead(perceptual_map::PerceptualMapper mapper)
+    : mapper_(std::move(mapper)) {}
+
+PerceptualMapOnRead::PerceptualMapOnRead(perceptual_map::PerceptualMap map) : map_(std::move(map)) {
+  std::call_once(built_, [] {});
+}
+
+const perceptual_map::PerceptualMap& PerceptualMapOnRead::Get() const {
+  std::call_once(built_, [this] {
+    map_ = mapper_->Map(true);
+    mapper_.reset();  // its copy of the map is no longer needed
+  });
+  return map_;
+}
+
+const perceptual_map::PerceptualMap& MapsSnapshot::perceptual() const {
+  static const perceptual_map::PerceptualMap kNone;
+  return perceptual_on_read ? perceptual_on_read->Get() : kNone;
+}
+
 std::shared_ptr<const MapsSnapshot> MobileMapper::SnapshotWithOpenStop() const {
   if (!standing_at_stop()) return Snapshot();
   occupancy::LayeredGrid grid = grid_;  // copies: the maps themselves stay as they are
@@ -510,7 +530,7 @@ std::shared_ptr<const MapsSnapshot> MobileMapper::SnapshotWithOpenStop() const {
   auto s = std::make_shared<MapsSnapshot>();
   s->stamp_ns = last_stamp_ns_;
   s->includes_open_stop = true;
-  s->perceptual = perceptual.Map(true);
+  s->perceptual_on_read = std::make_shared<const PerceptualMapOnRead>(std::move(perceptual));
   s->grid = std::move(grid);
   s->poses = poses.records();
   s->counters = counters_;  // what happened, not what the provisional merge would count
@@ -521,10 +541,10 @@ std::shared_ptr<const MapsSnapshot> MobileMapper::Snapshot() const {
   auto s = std::make_shared<MapsSnapshot>();
   s->stamp_ns = last_stamp_ns_;
   if (!published_perceptual_ || published_perceptual_revision_ != perceptual_.revision()) {
-    published_perceptual_ = perceptual_.Map(true);
+    published_perceptual_ = std::make_shared<const PerceptualMapOnRead>(perceptual_);
     published_perceptual_revision_ = perceptual_.revision();
   }
-  s->perceptual = *published_perceptual_;
+  s->perceptual_on_read = published_perceptual_;
   s->grid = grid_;  // shares the cells until the mapper changes them (copy on write)
   s->poses = poses_.records();
   s->counters = counters_;

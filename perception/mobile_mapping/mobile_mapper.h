@@ -15,6 +15,7 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <numbers>
 #include <opencv2/core.hpp>
 #include <optional>
@@ -237,6 +238,25 @@ struct MapperCounters {
   uint64_t heading_turns = 0;   // stops whose heading the registration turned
 };
 
+// A snapshot's perceptual map, built when first read. Its redundancy removal and boundary
+// (paper 003, Sec. III-D) cost time that grows with the map and the path (tens of ms after a
+// few hundred metres of a floor driven again), while readers poll slower than key frames come:
+// the mapper hands out a copy of its perceptual mapper and the first reader pays for the map,
+// on the reader's thread. Thread-safe: concurrent first readers wait for one computation.
+class PerceptualMapOnRead {
+ public:
+  // PerceptualMapper::Map(true) of `mapper`, when first read.
+  explicit PerceptualMapOnRead(perceptual_map::PerceptualMapper mapper);
+  // A map already built.
+  explicit PerceptualMapOnRead(perceptual_map::PerceptualMap map);
+  const perceptual_map::PerceptualMap& Get() const;
+
+ private:
+  mutable std::once_flag built_;
+  mutable std::optional<perceptual_map::PerceptualMapper> mapper_;  // until built
+  mutable perceptual_map::PerceptualMap map_;
+};
+
 // What readers get: immutable once built.
 struct MapsSnapshot {
   int64_t stamp_ns = 0;
@@ -244,7 +264,9 @@ struct MapsSnapshot {
   // Restored from saved state (a restart of the service) and not yet confirmed or dropped by
   // a key frame: the maps as they were saved, in an odometry frame not yet checked to continue.
   bool resumed_unconfirmed = false;
-  perceptual_map::PerceptualMap perceptual;
+  // The perceptual map (built on first read, see PerceptualMapOnRead; an empty map if unset).
+  const perceptual_map::PerceptualMap& perceptual() const;
+  std::shared_ptr<const PerceptualMapOnRead> perceptual_on_read;
   occupancy::LayeredGrid grid;
   std::vector<localisation::PoseRecord> poses;  // one per accepted key frame
   MapperCounters counters;
@@ -357,9 +379,9 @@ class MobileMapper {
   cv::Size image_size_;
   bool restore_unconfirmed_ = false;
   // The perceptual map the last Snapshot() handed out, kept while perceptual_.revision() says
-  // it still holds: while the base drives between stops no view joins, and the boundary
-  // (paper 003 Sec. III-D) grows with the map and the path. Single-threaded like the rest.
-  mutable std::optional<perceptual_map::PerceptualMap> published_perceptual_;
+  // it still holds: while the base drives between stops no view joins, and every snapshot of
+  // one revision shares one map, built once when first read. Single-threaded like the rest.
+  mutable std::shared_ptr<const PerceptualMapOnRead> published_perceptual_;
   mutable uint64_t published_perceptual_revision_ = 0;
   // Back to a mapper that has seen nothing (the restored maps were not the odometry's).
   void ClearMaps();

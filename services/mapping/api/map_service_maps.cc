@@ -190,7 +190,7 @@ grpc::Status MapServiceImpl::GetPerceptualMap(grpc::ServerContext* context,
     box.emplace();
     if (auto bad = WindowBoxOf(window, *maps, &*box); !bad.ok()) return bad;
   }
-  const auto& m = maps->perceptual;
+  const auto& m = maps->perceptual();
   out->set_stamp_ns(maps->stamp_ns);
   out->set_includes_open_stop(maps->includes_open_stop);
   out->set_resumed_unconfirmed(maps->resumed_unconfirmed);

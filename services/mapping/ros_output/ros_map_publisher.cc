@@ -154,12 +154,12 @@ void RosMapPublisher::PublishGrid(const mobile_mapping::MapsSnapshot& maps) {
 void RosMapPublisher::PublishMarkers(const mobile_mapping::MapsSnapshot& maps) {
   if (!writers_->markers) return;
   visualization_msgs::msg::MarkerArray msg;
-  ToRosMarkers(maps.perceptual, maps.stamp_ns, config_.maps.map_frame, &msg);
+  ToRosMarkers(maps.perceptual(), maps.stamp_ns, config_.maps.map_frame, &msg);
   if (writers_->markers->Write(msg)) {
     events_.Increment("ros_perceptual_map_published");
   } else {
     spdlog::warn("{}: the perceptual map ({} segments) could not be written",
-                 config_.topics.perceptual_map, maps.perceptual.segments.size());
+                 config_.topics.perceptual_map, maps.perceptual().segments.size());
   }
 }
 

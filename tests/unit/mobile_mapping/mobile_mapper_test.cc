@@ -7,6 +7,7 @@
 #include <opencv2/imgproc.hpp>
 #include <string>
 #include <string_view>
+#include <thread>
 
 #include "perception/localisation/pose_corrector.h"
 #include "perception/mobile_mapping/key_frame_selector.h"
@@ -110,12 +111,12 @@ TEST_F(MobileMapperTest, BuildsBothMapsAndCorrectsTheHeading) {
   for (const auto& w : testing::RoomWalls())
     walls.push_back({T_start_world * w.a, T_start_world * w.b});
   std::vector<mobile_mapping::Segment2> segments;
-  for (const auto& s : snap->perceptual.segments) segments.push_back({s.a, s.b});
+  for (const auto& s : snap->perceptual().segments) segments.push_back({s.a, s.b});
   ASSERT_GT(segments.size(), 20u);
   EXPECT_GT(mobile_mapping::CoveredShare(segments, walls, 0.3), 0.9);  // map on the walls
   const auto grid = snap->grid.Export();
   EXPECT_GT(mobile_mapping::ScoreGrid(grid, walls).intersection, 50u);
-  EXPECT_GE(snap->perceptual.path.size(), 3u);
+  EXPECT_GE(snap->perceptual().path.size(), 3u);
 }
 
 // Beyond paper 002: the heading registered against the global map. With the visual heading
@@ -191,20 +192,21 @@ TEST_F(MobileMapperTest, TheOpenStopIsInTheProvisionalSnapshotOnly) {
   const auto provisional = mapper.SnapshotWithOpenStop();
   EXPECT_FALSE(committed->includes_open_stop);
   EXPECT_TRUE(provisional->includes_open_stop);
-  EXPECT_EQ(provisional->perceptual.views.size(), committed->perceptual.views.size() + 1);
+  EXPECT_EQ(provisional->perceptual().views.size(), committed->perceptual().views.size() + 1);
   EXPECT_EQ(provisional->counters.views, committed->counters.views);  // nothing counted twice
   // The mapper itself is untouched.
-  EXPECT_EQ(mapper.Snapshot()->perceptual.views.size(), committed->perceptual.views.size());
-  EXPECT_EQ(mapper.Snapshot()->perceptual.segments.size(), committed->perceptual.segments.size());
+  EXPECT_EQ(mapper.Snapshot()->perceptual().views.size(), committed->perceptual().views.size());
+  EXPECT_EQ(mapper.Snapshot()->perceptual().segments.size(),
+            committed->perceptual().segments.size());
 
   mapper.Flush();
   EXPECT_FALSE(mapper.standing_at_stop());
   const auto closed = mapper.Snapshot();
-  EXPECT_EQ(closed->perceptual.views.size(), provisional->perceptual.views.size());
-  ASSERT_EQ(closed->perceptual.segments.size(), provisional->perceptual.segments.size());
-  for (size_t i = 0; i < closed->perceptual.segments.size(); ++i) {
-    EXPECT_EQ(closed->perceptual.segments[i].a, provisional->perceptual.segments[i].a);
-    EXPECT_EQ(closed->perceptual.segments[i].b, provisional->perceptual.segments[i].b);
+  EXPECT_EQ(closed->perceptual().views.size(), provisional->perceptual().views.size());
+  ASSERT_EQ(closed->perceptual().segments.size(), provisional->perceptual().segments.size());
+  for (size_t i = 0; i < closed->perceptual().segments.size(); ++i) {
+    EXPECT_EQ(closed->perceptual().segments[i].a, provisional->perceptual().segments[i].a);
+    EXPECT_EQ(closed->perceptual().segments[i].b, provisional->perceptual().segments[i].b);
   }
   const auto closed_grid = closed->grid.Export();
   const auto provisional_grid = provisional->grid.Export();
@@ -216,22 +218,57 @@ TEST_F(MobileMapperTest, TheOpenStopIsInTheProvisionalSnapshotOnly) {
   EXPECT_FALSE(mapper.SnapshotWithOpenStop()->includes_open_stop);
 }
 
+// A snapshot's perceptual map is built when first read (its boundary costs time that grows
+// with the map): read late, by several readers at once, it is still the map at the time the
+// snapshot was taken, built once.
+TEST_F(MobileMapperTest, ASnapshotsPerceptualMapIsTheOneWhenTakenWhenAndByWhomeverRead) {
+  MobileMapper mapper(testing::BumblebeeLikeCamera(), Params());
+  const size_t half = frames_->size() / 2;
+  for (size_t i = 0; i < half; ++i) ASSERT_TRUE(mapper.AddKeyFrame((*frames_)[i]).accepted);
+  const auto expected = mapper.perceptual().Map(true);
+  ASSERT_FALSE(expected.segments.empty());
+  const auto snap = mapper.Snapshot();
+  for (size_t i = half; i < frames_->size(); ++i) {
+    ASSERT_TRUE(mapper.AddKeyFrame((*frames_)[i]).accepted);
+  }
+  mapper.Flush();
+  ASSERT_NE(mapper.perceptual().Map(true).segments.size(), expected.segments.size());
+
+  std::vector<const perceptual_map::PerceptualMap*> seen(4, nullptr);
+  std::vector<std::thread> readers;
+  for (auto& s : seen) readers.emplace_back([&s, &snap] { s = &snap->perceptual(); });
+  for (auto& t : readers) t.join();
+  for (const auto* s : seen) EXPECT_EQ(s, seen.front());  // one map, built once
+  const auto& read = *seen.front();
+  ASSERT_EQ(read.segments.size(), expected.segments.size());
+  for (size_t i = 0; i < read.segments.size(); ++i) {
+    EXPECT_EQ(read.segments[i].id, expected.segments[i].id);
+    EXPECT_EQ(read.segments[i].a, expected.segments[i].a);
+  }
+  EXPECT_EQ(read.path.size(), expected.path.size());
+  EXPECT_EQ(read.boundary.inner_ids, expected.boundary.inner_ids);
+  EXPECT_EQ(read.boundary.outer_ids, expected.boundary.outer_ids);
+  EXPECT_EQ(read.kept_segments.size(), expected.kept_segments.size());
+  const auto unset = std::make_shared<const mobile_mapping::MapsSnapshot>();
+  EXPECT_TRUE(unset->perceptual().segments.empty());  // no map set: an empty one
+}
+
 // The snapshot keeps the perceptual map it handed out until the map changes: every snapshot
 // must still show the map as it is now, through stops, restores and dropped maps.
 void ExpectSnapshotShowsTheMapNow(const MobileMapper& mapper, const std::string& when) {
   const auto now = mapper.perceptual().Map(true);
   const auto snap = mapper.Snapshot();
-  ASSERT_EQ(snap->perceptual.segments.size(), now.segments.size()) << when;
+  ASSERT_EQ(snap->perceptual().segments.size(), now.segments.size()) << when;
   for (size_t i = 0; i < now.segments.size(); ++i) {
-    EXPECT_EQ(snap->perceptual.segments[i].id, now.segments[i].id) << when;
-    EXPECT_EQ(snap->perceptual.segments[i].a, now.segments[i].a) << when;
-    EXPECT_EQ(snap->perceptual.segments[i].b, now.segments[i].b) << when;
+    EXPECT_EQ(snap->perceptual().segments[i].id, now.segments[i].id) << when;
+    EXPECT_EQ(snap->perceptual().segments[i].a, now.segments[i].a) << when;
+    EXPECT_EQ(snap->perceptual().segments[i].b, now.segments[i].b) << when;
   }
-  EXPECT_EQ(snap->perceptual.views.size(), now.views.size()) << when;
-  EXPECT_EQ(snap->perceptual.path.size(), now.path.size()) << when;
-  EXPECT_EQ(snap->perceptual.boundary.inner_ids, now.boundary.inner_ids) << when;
-  EXPECT_EQ(snap->perceptual.boundary.outer_ids, now.boundary.outer_ids) << when;
-  EXPECT_EQ(snap->perceptual.stamp_ns, now.stamp_ns) << when;
+  EXPECT_EQ(snap->perceptual().views.size(), now.views.size()) << when;
+  EXPECT_EQ(snap->perceptual().path.size(), now.path.size()) << when;
+  EXPECT_EQ(snap->perceptual().boundary.inner_ids, now.boundary.inner_ids) << when;
+  EXPECT_EQ(snap->perceptual().boundary.outer_ids, now.boundary.outer_ids) << when;
+  EXPECT_EQ(snap->perceptual().stamp_ns, now.stamp_ns) << when;
 }
 
 TEST_F(MobileMapperTest, EverySnapshotShowsThePerceptualMapAsItIsNow) {
@@ -242,8 +279,8 @@ TEST_F(MobileMapperTest, EverySnapshotShowsThePerceptualMapAsItIsNow) {
     ASSERT_TRUE(mapper.AddKeyFrame((*frames_)[i]).accepted);
     ExpectSnapshotShowsTheMapNow(mapper, "after key frame " + std::to_string(i));
     const auto after = mapper.Snapshot();
-    if (after->perceptual.views.size() != before->perceptual.views.size()) ++views;
-    if (after->perceptual.segments.size() == before->perceptual.segments.size()) ++unchanged;
+    if (after->perceptual().views.size() != before->perceptual().views.size()) ++views;
+    if (after->perceptual().segments.size() == before->perceptual().segments.size()) ++unchanged;
   }
   EXPECT_GE(views, 3u);      // the map grew along the run ...
   EXPECT_GE(unchanged, 5u);  // ... and stayed between stops, where the kept map is handed out
@@ -256,8 +293,8 @@ TEST_F(MobileMapperTest, EverySnapshotShowsThePerceptualMapAsItIsNow) {
   ExpectSnapshotShowsTheMapNow(resumed, "fresh");
   ASSERT_TRUE(resumed.RestoreState(saved, nullptr));
   ExpectSnapshotShowsTheMapNow(resumed, "restored");
-  EXPECT_EQ(resumed.Snapshot()->perceptual.segments.size(),
-            mapper.Snapshot()->perceptual.segments.size());
+  EXPECT_EQ(resumed.Snapshot()->perceptual().segments.size(),
+            mapper.Snapshot()->perceptual().segments.size());
   ASSERT_TRUE(resumed.AddKeyFrame(frames_->front()).restored_maps_dropped.has_value());
   ExpectSnapshotShowsTheMapNow(resumed, "dropped");
 }
@@ -312,7 +349,7 @@ TEST_F(MobileMapperTest, RefusesBadKeyFramesAndKeepsTheMapsIntact) {
   EXPECT_EQ(after->counters.rejected, 8u);
   EXPECT_EQ(after->counters.rejected_by_reason.at("odometry_jump"), 1u);
   EXPECT_EQ(after->poses.size(), before->poses.size());
-  EXPECT_EQ(after->perceptual.segments.size(), before->perceptual.segments.size());
+  EXPECT_EQ(after->perceptual().segments.size(), before->perceptual().segments.size());
   EXPECT_EQ(after->grid.Export().occupancy, before->grid.Export().occupancy);
   // The run goes on where it was.
   EXPECT_TRUE(mapper.AddKeyFrame((*frames_)[half]).accepted);
@@ -446,7 +483,7 @@ TEST_F(MobileMapperTest, AStopWithNoEdgesIsCountedNotFatal) {
   KeyFrame c = b;
   c.stamp_ns += 1'000'000'000;
   c.T_odom_base = b.T_odom_base * MakePose(0.3, 0, 0);
-  const auto segments_before = mapper.Snapshot()->perceptual.segments.size();
+  const auto segments_before = mapper.Snapshot()->perceptual().segments.size();
   EXPECT_TRUE(mapper.AddKeyFrame(a).accepted);
   EXPECT_TRUE(mapper.AddKeyFrame(b).accepted);
   const auto r = mapper.AddKeyFrame(c);
@@ -455,7 +492,7 @@ TEST_F(MobileMapperTest, AStopWithNoEdgesIsCountedNotFatal) {
   EXPECT_TRUE(r.view_skipped);
   EXPECT_EQ(mapper.counters().views_without_objects, 1u);
   EXPECT_EQ(r.heading_source, localisation::HeadingSource::kOdometry);  // nothing to track
-  EXPECT_GE(mapper.Snapshot()->perceptual.segments.size(), segments_before);
+  EXPECT_GE(mapper.Snapshot()->perceptual().segments.size(), segments_before);
 }
 
 // The correlation's Kalman filter (odometry_drift_per_m > 0): trusting odometry (a tiny drift)
@@ -533,10 +570,10 @@ TEST_F(MobileMapperTest, SavedMapsResumeExactlyWhereTheyStopped) {
   resumed.Flush();
   EXPECT_EQ(resumed.SaveState(), running.SaveState());
   const auto a = running.Snapshot(), b = resumed.Snapshot();
-  ASSERT_EQ(a->perceptual.segments.size(), b->perceptual.segments.size());
-  for (size_t i = 0; i < a->perceptual.segments.size(); ++i) {
-    EXPECT_EQ(a->perceptual.segments[i].id, b->perceptual.segments[i].id);
-    EXPECT_EQ(a->perceptual.segments[i].a, b->perceptual.segments[i].a);
+  ASSERT_EQ(a->perceptual().segments.size(), b->perceptual().segments.size());
+  for (size_t i = 0; i < a->perceptual().segments.size(); ++i) {
+    EXPECT_EQ(a->perceptual().segments[i].id, b->perceptual().segments[i].id);
+    EXPECT_EQ(a->perceptual().segments[i].a, b->perceptual().segments[i].a);
   }
   EXPECT_EQ(a->grid.Export().occupancy, b->grid.Export().occupancy);
   EXPECT_EQ(a->poses.back().T_world_base.matrix(), b->poses.back().T_world_base.matrix());
