@@ -37,24 +37,19 @@ TEST(EpmapSimPublish, EveryFrameArrivesIntact) {
   std::vector<dds::CameraCalibration> right_infos;
   std::vector<dds::JointReading> joints;
   const uint32_t kMax = 8u << 20;
+  // Each camera's images by stamp.
+  const auto images_by_stamp = [&](std::map<int64_t, cv::Mat>* into) {
+    return [&mutex, into](sensor_msgs::msg::Image&& m) {
+      std::string reason;
+      cv::Mat img = dds::ImageToMat(m, &reason);
+      std::lock_guard lock(mutex);
+      (*into)[dds::ToNanoseconds(m.header().stamp())] = img;
+    };
+  };
   dds::Reader<sensor_msgs::msg::Image, sensor_msgs::msg::ImagePubSubType> left_reader(
-      participant, topics.left_image,
-      [&](sensor_msgs::msg::Image&& m) {
-        std::string reason;
-        cv::Mat img = dds::ImageToMat(m, &reason);
-        std::lock_guard lock(mutex);
-        left[dds::ToNanoseconds(m.header().stamp())] = img;
-      },
-      kMax, 50);
+      participant, topics.left_image, images_by_stamp(&left), kMax, 50);
   dds::Reader<sensor_msgs::msg::Image, sensor_msgs::msg::ImagePubSubType> right_reader(
-      participant, topics.right_image,
-      [&](sensor_msgs::msg::Image&& m) {
-        std::string reason;
-        cv::Mat img = dds::ImageToMat(m, &reason);
-        std::lock_guard lock(mutex);
-        right[dds::ToNanoseconds(m.header().stamp())] = img;
-      },
-      kMax, 50);
+      participant, topics.right_image, images_by_stamp(&right), kMax, 50);
   dds::Reader<sensor_msgs::msg::CameraInfo, sensor_msgs::msg::CameraInfoPubSubType> info_reader(
       participant, topics.right_info,
       [&](sensor_msgs::msg::CameraInfo&& m) {
