@@ -221,7 +221,7 @@ TEST_F(MobileMapperTest, TheOpenStopIsInTheProvisionalSnapshotOnly) {
 // A snapshot's perceptual map is built when first read (its boundary costs time that grows
 // with the map): read late, by several readers at once, it is still the map at the time the
 // snapshot was taken, built once.
-TEST_F(MobileMapperTest, ASnapshotsPerceptualMapIsTheOneWhenTakenWhenAndByWhomeverRead) {
+TEST_F(MobileMapperTest, SnapshotsPerceptualMapIsTheOneWhenTakenHoweverLateAndManyReadIt) {
   MobileMapper mapper(testing::BumblebeeLikeCamera(), Params());
   const size_t half = frames_->size() / 2;
   for (size_t i = 0; i < half; ++i) ASSERT_TRUE(mapper.AddKeyFrame((*frames_)[i]).accepted);
