@@ -1,6 +1,7 @@
 #include "perception/mobile_mapping/mobile_mapper.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
@@ -498,8 +499,8 @@ bool MobileMapper::standing_at_stop() const {
          static_cast<int>(group_.frames.size()) >= std::max(2, MinKeyFramesForView());
 }
 
-PerceptualMapOnRead::PerceptualMapOnRead(perceptual_map::PerceptualMapper mapper)
-    : mapper_(std::move(mapper)) {}
+PerceptualMapOnRead::PerceptualMapOnRead(perceptual_map::PerceptualMapper mapper, OnBuilt on_built)
+    : mapper_(std::move(mapper)), on_built_(std::move(on_built)) {}
 
 PerceptualMapOnRead::PerceptualMapOnRead(perceptual_map::PerceptualMap map) : map_(std::move(map)) {
   std::call_once(built_, [] {});
@@ -507,8 +508,13 @@ PerceptualMapOnRead::PerceptualMapOnRead(perceptual_map::PerceptualMap map) : ma
 
 const perceptual_map::PerceptualMap& PerceptualMapOnRead::Get() const {
   std::call_once(built_, [this] {
+    const auto t0 = std::chrono::steady_clock::now();
     map_ = mapper_->Map(true);
     mapper_.reset();  // its copy of the map is no longer needed
+    if (on_built_) {
+      on_built_(
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    }
   });
   return map_;
 }
@@ -530,7 +536,8 @@ std::shared_ptr<const MapsSnapshot> MobileMapper::SnapshotWithOpenStop() const {
   auto s = std::make_shared<MapsSnapshot>();
   s->stamp_ns = last_stamp_ns_;
   s->includes_open_stop = true;
-  s->perceptual_on_read = std::make_shared<const PerceptualMapOnRead>(std::move(perceptual));
+  s->perceptual_on_read =
+      std::make_shared<const PerceptualMapOnRead>(std::move(perceptual), on_perceptual_map_built_);
   s->grid = std::move(grid);
   s->poses = poses.records();
   s->counters = counters_;  // what happened, not what the provisional merge would count
@@ -541,7 +548,8 @@ std::shared_ptr<const MapsSnapshot> MobileMapper::Snapshot() const {
   auto s = std::make_shared<MapsSnapshot>();
   s->stamp_ns = last_stamp_ns_;
   if (!published_perceptual_ || published_perceptual_revision_ != perceptual_.revision()) {
-    published_perceptual_ = std::make_shared<const PerceptualMapOnRead>(perceptual_);
+    published_perceptual_ =
+        std::make_shared<const PerceptualMapOnRead>(perceptual_, on_perceptual_map_built_);
     published_perceptual_revision_ = perceptual_.revision();
   }
   s->perceptual_on_read = published_perceptual_;

@@ -13,6 +13,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -245,8 +246,11 @@ struct MapperCounters {
 // on the reader's thread. Thread-safe: concurrent first readers wait for one computation.
 class PerceptualMapOnRead {
  public:
+  // Told how long the build took (ms), on the thread of the reader that built the map; it may
+  // run after the mapper is gone, so it must own what it uses.
+  using OnBuilt = std::function<void(double ms)>;
   // PerceptualMapper::Map(true) of `mapper`, when first read.
-  explicit PerceptualMapOnRead(perceptual_map::PerceptualMapper mapper);
+  explicit PerceptualMapOnRead(perceptual_map::PerceptualMapper mapper, OnBuilt on_built = {});
   // A map already built.
   explicit PerceptualMapOnRead(perceptual_map::PerceptualMap map);
   const perceptual_map::PerceptualMap& Get() const;
@@ -255,6 +259,7 @@ class PerceptualMapOnRead {
   mutable std::once_flag built_;
   mutable std::optional<perceptual_map::PerceptualMapper> mapper_;  // until built
   mutable perceptual_map::PerceptualMap map_;
+  OnBuilt on_built_;
 };
 
 // What readers get: immutable once built.
@@ -294,6 +299,11 @@ class MobileMapper {
   // Without a standing stop (below), the same as Snapshot(). Costs a copy of the maps and one
   // registration.
   std::shared_ptr<const MapsSnapshot> SnapshotWithOpenStop() const;
+  // Called whenever a reader builds a snapshot's perceptual map (PerceptualMapOnRead::OnBuilt):
+  // how a service still sees what the readers pay for the maps (epmapd: maps.perceptual_read).
+  void SetOnPerceptualMapBuilt(PerceptualMapOnRead::OnBuilt on_built) {
+    on_perceptual_map_built_ = std::move(on_built);
+  }
   // The base stands at an open stop (two key frames or more there) that would make a view if
   // it closed now. (A moving base opens a one-key-frame group at each key frame; the next one
   // closes it.)
@@ -382,6 +392,7 @@ class MobileMapper {
   // it still holds: while the base drives between stops no view joins, and every snapshot of
   // one revision shares one map, built once when first read. Single-threaded like the rest.
   mutable std::shared_ptr<const PerceptualMapOnRead> published_perceptual_;
+  PerceptualMapOnRead::OnBuilt on_perceptual_map_built_;
   mutable uint64_t published_perceptual_revision_ = 0;
   // Back to a mapper that has seen nothing (the restored maps were not the odometry's).
   void ClearMaps();

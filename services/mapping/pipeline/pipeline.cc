@@ -234,12 +234,12 @@ void Pipeline::Process(StereoFrame& frame) {
   auto t0 = Clock::now();
   cv::Mat left, right;
   rectifier->Rectify(frame.left, frame.right, left, right);
-  stage_ms_.Add("rectify", MsSince(t0));
+  stage_ms_->Add("rectify", MsSince(t0));
 
   t0 = Clock::now();
   std::string pose_reason;
   const auto pose = PoseAt(frame.stamp_ns, &pose_reason);
-  stage_ms_.Add("pose", MsSince(t0));
+  stage_ms_->Add("pose", MsSince(t0));
 
   auto snapshot = std::make_shared<MapSnapshot>();
   snapshot->frame_index = processed_.load() + 1;
@@ -263,7 +263,7 @@ void Pipeline::Process(StereoFrame& frame) {
     }
     t0 = Clock::now();
     snapshot->disparity = matcher_.Compute(left, right);
-    stage_ms_.Add("sgbm", MsSince(t0));
+    stage_ms_->Add("sgbm", MsSince(t0));
     full_refreshes_++;
     if (pose) {
       snapshot->T_base_cam0 = pose->T_base_cam0;
@@ -274,10 +274,10 @@ void Pipeline::Process(StereoFrame& frame) {
   if (config_.maps.enabled && mode() == "mobile-base") {
     t0 = Clock::now();
     RunMaps(frame, *rectifier, left, right, *snapshot);
-    stage_ms_.Add("maps", MsSince(t0));
+    stage_ms_->Add("maps", MsSince(t0));
   }
   snapshot->valid_share = ValidShare(snapshot->disparity);
-  stage_ms_.Add("total", MsSince(t_start));
+  stage_ms_->Add("total", MsSince(t_start));
   const double recomputed = snapshot->recomputed_share;
   const auto unexpected = snapshot->unexpected;
   snapshots_.Publish(std::move(snapshot));

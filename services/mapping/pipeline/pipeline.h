@@ -44,7 +44,7 @@ class Pipeline {
   void Stop();  // finishes the frame in hand, then returns
 
   uint64_t frames_processed() const { return processed_.load(); }
-  const RollingStats& stage_ms() const { return stage_ms_; }
+  const RollingStats& stage_ms() const { return *stage_ms_; }
   const RollingStats& figures() const { return figures_; }  // latency_ms, recomputed_share
   uint64_t full_refreshes() const { return full_refreshes_.load(); }
   CounterSet& events() { return events_; }
@@ -179,7 +179,9 @@ class Pipeline {
   RawFrameTap* frame_tap_ = nullptr;
   std::optional<ModelRectification> model_rectification_;
 
-  RollingStats stage_ms_;
+  // Shared with the maps' snapshots, whose readers add maps.perceptual_read (any thread, maybe
+  // after the pipeline is gone).
+  std::shared_ptr<RollingStats> stage_ms_ = std::make_shared<RollingStats>();
   RollingStats figures_;
   CounterSet events_;
   std::atomic<uint64_t> processed_{0};

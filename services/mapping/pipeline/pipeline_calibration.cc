@@ -48,7 +48,7 @@ const stereo::Rectifier* Pipeline::StereoModelRectifier(const StereoFrame& frame
     return nullptr;
   }
   if (model_rectification_->rebuilds() != rebuilds_before) {
-    stage_ms_.Add(
+    stage_ms_->Add(
         "stereo_model_maps",
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
     events_.Increment("stereo_model_rectification_rebuilt");

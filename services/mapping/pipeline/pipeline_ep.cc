@@ -117,12 +117,12 @@ void Pipeline::RunExpectedPerception(const StereoFrame& frame, const stereo::Rec
     return;
   }
   const auto& t = result->timings;
-  stage_ms_.Add("ep.predict", t.predict_ms);
-  stage_ms_.Add("ep.compare", t.compare_ms);
-  stage_ms_.Add("ep.plan", t.plan_ms);
-  stage_ms_.Add("ep.stereo", t.stereo_ms);
-  stage_ms_.Add("ep.fuse", t.fuse_ms);
-  stage_ms_.Add("ep.total", t.total_ms);
+  stage_ms_->Add("ep.predict", t.predict_ms);
+  stage_ms_->Add("ep.compare", t.compare_ms);
+  stage_ms_->Add("ep.plan", t.plan_ms);
+  stage_ms_->Add("ep.stereo", t.stereo_ms);
+  stage_ms_->Add("ep.fuse", t.fuse_ms);
+  stage_ms_->Add("ep.total", t.total_ms);
   if (const char* name = EventName(result->mode); *name) events_.Increment(name);
   if (result->from_earlier_view) events_.Increment("ep_predicted_from_earlier_view");
   if (result->mode != ep::FrameMode::kPredicted) full_refreshes_++;

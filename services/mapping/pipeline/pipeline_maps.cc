@@ -18,6 +18,13 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
+// A snapshot's perceptual map is built by its first reader (a gRPC call, the ROS publisher),
+// on that reader's thread: the time goes to the stage timings as maps.perceptual_read.
+mobile_mapping::PerceptualMapOnRead::OnBuilt RecordPerceptualReadsIn(
+    std::shared_ptr<RollingStats> stages) {
+  return [stages = std::move(stages)](double ms) { stages->Add("maps.perceptual_read", ms); };
+}
+
 mobile_mapping::MobileMapperParams MakeMapperParams(
     const MapsSettings& s, const std::vector<mobile_mapping::JointLimit>& limits) {
   mobile_mapping::MobileMapperParams p;
@@ -98,6 +105,7 @@ void Pipeline::ResumeSavedMaps() {
       return;
     }
     mapper_ = std::move(mapper);
+    mapper_->SetOnPerceptualMapBuilt(RecordPerceptualReadsIn(stage_ms_));
     maps_saved_stops_ = MergedStops(mapper_->counters());
     maps_ = mapper_->Snapshot();
     {
@@ -139,8 +147,8 @@ void Pipeline::SaveMaps(bool now_regardless) {
   if (maps_reset_requested_) return;  // these maps are about to go: never save them again
   const auto t0 = Clock::now();
   maps_store_->Offer(mapper_->SaveState(), mapper_->counters().key_frames);
-  stage_ms_.Add("maps.save_state",
-                std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+  stage_ms_->Add("maps.save_state",
+                 std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
   maps_saved_stops_ = merged;
   maps_saved_at_ = now;
 }
@@ -220,6 +228,7 @@ void Pipeline::RunMaps(const StereoFrame& frame, const stereo::Rectifier& rectif
     ForgetResumedMaps();
     mapper_ = std::make_unique<mobile_mapping::MobileMapper>(
         rectifier.geometry(), MakeMapperParams(config_.maps, joint_limits_));
+    mapper_->SetOnPerceptualMapBuilt(RecordPerceptualReadsIn(stage_ms_));
     maps_.reset();
     snapshot.maps.reset();
     maps_saved_stops_ = 0;
@@ -256,20 +265,20 @@ void Pipeline::RunMaps(const StereoFrame& frame, const stereo::Rectifier& rectif
   if (report.shifted) events_.Increment("maps_correlation_shifts");
   if (report.heading_turn_rad != 0) events_.Increment("maps_heading_turns");
   if (!key_frame.moving.empty()) events_.Increment("maps_key_frame_motion_masked");
-  stage_ms_.Add("maps.key_frame",
-                std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+  stage_ms_->Add("maps.key_frame",
+                 std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
   // While the robot stands at a stop, readers get the stop merged provisionally: a planner
   // wants what the robot sees now; the maps take the stop in for good when the base moves on.
   if (config_.maps.open_stop_in_maps && mapper_->standing_at_stop()) {
     const auto t1 = Clock::now();
     maps_ = mapper_->SnapshotWithOpenStop();
-    stage_ms_.Add("maps.open_stop",
-                  std::chrono::duration<double, std::milli>(Clock::now() - t1).count());
+    stage_ms_->Add("maps.open_stop",
+                   std::chrono::duration<double, std::milli>(Clock::now() - t1).count());
   } else {
     const auto t1 = Clock::now();
     maps_ = mapper_->Snapshot();
-    stage_ms_.Add("maps.snapshot",
-                  std::chrono::duration<double, std::milli>(Clock::now() - t1).count());
+    stage_ms_->Add("maps.snapshot",
+                   std::chrono::duration<double, std::milli>(Clock::now() - t1).count());
   }
   snapshot.maps = maps_;
 }

@@ -188,6 +188,26 @@ TEST(MapsE2E, BuildingRunGivesMapsNearTheTrueWalls) {
     EXPECT_NE(ReadText(work / "map.svg").find("<svg"), std::string::npos);
   }
 
+  // The perceptual map is built by its first reader (the pmap calls above, the ROS publisher):
+  // the status shows what the readers paid, beside the mapping thread's stages.
+  {
+    const auto read_stage = [](const v1::ServiceStatus& st) -> const v1::StageTiming* {
+      for (const auto& t : st.stages()) {
+        if (t.stage() == "maps.perceptual_read") return &t;
+      }
+      return nullptr;
+    };
+    const auto st =
+        epmapd.WaitStatus([&](const v1::ServiceStatus& s) { return read_stage(s) != nullptr; },
+                          std::chrono::seconds(10));
+    const auto* t = read_stage(st);
+    ASSERT_NE(t, nullptr) << st.DebugString();
+    EXPECT_GE(t->samples(), 1u);
+    EXPECT_GT(t->median_ms(), 0.0);
+    std::printf("maps.perceptual_read: %llu builds, median %.2f ms\n",
+                static_cast<unsigned long long>(t->samples()), t->median_ms());
+  }
+
   // Occupancy grid: PGM + YAML as map_server loads them; occupied cells near true walls.
   {
     const auto pgm = work / "grid.pgm";
