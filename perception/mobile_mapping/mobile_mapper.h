@@ -392,8 +392,8 @@ class MobileMapper {
   // it still holds: while the base drives between stops no view joins, and every snapshot of
   // one revision shares one map, built once when first read. Single-threaded like the rest.
   mutable std::shared_ptr<const PerceptualMapOnRead> published_perceptual_;
-  PerceptualMapOnRead::OnBuilt on_perceptual_map_built_;
   mutable uint64_t published_perceptual_revision_ = 0;
+  PerceptualMapOnRead::OnBuilt on_perceptual_map_built_;  // handed to every snapshot's map
   // Back to a mapper that has seen nothing (the restored maps were not the odometry's).
   void ClearMaps();
 };
