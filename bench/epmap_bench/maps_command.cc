@@ -300,8 +300,8 @@ RunResult Run(const Prepared& p, epmap::mobile_mapping::MobileMapperParams param
         c0 = std::chrono::steady_clock::now();
         auto rebuilt = std::make_shared<epmap::mobile_mapping::MapsSnapshot>();
         rebuilt->perceptual_on_read =
-            std::make_shared<const epmap::mobile_mapping::PerceptualMapOnRead>(
-                mapper.perceptual().Map(true));
+            std::make_shared<const epmap::mobile_mapping::PerceptualMapOnRead>(mapper.perceptual());
+        (void)rebuilt->perceptual();  // built now: the map recomputed, as before it was kept
         rebuilt->grid = mapper.grid().DeepCopy();
         rebuilt->poses = mapper.poses().records();
         rebuilt->counters = mapper.counters();

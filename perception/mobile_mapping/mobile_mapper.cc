@@ -502,10 +502,6 @@ bool MobileMapper::standing_at_stop() const {
 PerceptualMapOnRead::PerceptualMapOnRead(perceptual_map::PerceptualMapper mapper, OnBuilt on_built)
     : mapper_(std::move(mapper)), on_built_(std::move(on_built)) {}
 
-PerceptualMapOnRead::PerceptualMapOnRead(perceptual_map::PerceptualMap map) : map_(std::move(map)) {
-  std::call_once(built_, [] {});
-}
-
 const perceptual_map::PerceptualMap& PerceptualMapOnRead::Get() const {
   std::call_once(built_, [this] {
     const auto t0 = std::chrono::steady_clock::now();

@@ -251,8 +251,6 @@ class PerceptualMapOnRead {
   using OnBuilt = std::function<void(double ms)>;
   // PerceptualMapper::Map(true) of `mapper`, when first read.
   explicit PerceptualMapOnRead(perceptual_map::PerceptualMapper mapper, OnBuilt on_built = {});
-  // A map already built.
-  explicit PerceptualMapOnRead(perceptual_map::PerceptualMap map);
   const perceptual_map::PerceptualMap& Get() const;
 
  private:

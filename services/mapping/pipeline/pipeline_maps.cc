@@ -18,13 +18,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// A snapshot's perceptual map is built by its first reader (a gRPC call, the ROS publisher),
-// on that reader's thread: the time goes to the stage timings as maps.perceptual_read.
-mobile_mapping::PerceptualMapOnRead::OnBuilt RecordPerceptualReadsIn(
-    std::shared_ptr<RollingStats> stages) {
-  return [stages = std::move(stages)](double ms) { stages->Add("maps.perceptual_read", ms); };
-}
-
 mobile_mapping::MobileMapperParams MakeMapperParams(
     const MapsSettings& s, const std::vector<mobile_mapping::JointLimit>& limits) {
   mobile_mapping::MobileMapperParams p;
@@ -42,6 +35,19 @@ mobile_mapping::MobileMapperParams MakeMapperParams(
   p.reference_skip_to_height_m = s.reference_skip_to_height_m;
   p.joint_limits = limits;
   return p;
+}
+
+// The mapper epmapd runs. A snapshot's perceptual map is built by its first reader (a gRPC
+// call, the ROS publisher), on that reader's thread: the time goes to the stage timings as
+// maps.perceptual_read.
+std::unique_ptr<mobile_mapping::MobileMapper> MakeMapper(
+    const stereo::RectifiedGeometry& camera, const MapsSettings& settings,
+    const std::vector<mobile_mapping::JointLimit>& limits, std::shared_ptr<RollingStats> stages) {
+  auto mapper =
+      std::make_unique<mobile_mapping::MobileMapper>(camera, MakeMapperParams(settings, limits));
+  mapper->SetOnPerceptualMapBuilt(
+      [stages = std::move(stages)](double ms) { stages->Add("maps.perceptual_read", ms); });
+  return mapper;
 }
 
 uint64_t MergedStops(const mobile_mapping::MapperCounters& c) {
@@ -95,9 +101,7 @@ void Pipeline::ResumeSavedMaps() {
     // camera drops them (RunMaps).
     std::string reason;
     const auto camera = mobile_mapping::MobileMapper::SavedCamera(saved->bytes, &reason);
-    auto mapper = camera ? std::make_unique<mobile_mapping::MobileMapper>(
-                               *camera, MakeMapperParams(config_.maps, joint_limits_))
-                         : nullptr;
+    auto mapper = camera ? MakeMapper(*camera, config_.maps, joint_limits_, stage_ms_) : nullptr;
     if (!mapper || !mapper->RestoreState(saved->bytes, &reason)) {
       events_.Increment("maps_saved_not_resumed");
       spdlog::warn("maps: the saved maps in {} are not resumed, new maps start: {}",
@@ -105,7 +109,6 @@ void Pipeline::ResumeSavedMaps() {
       return;
     }
     mapper_ = std::move(mapper);
-    mapper_->SetOnPerceptualMapBuilt(RecordPerceptualReadsIn(stage_ms_));
     maps_saved_stops_ = MergedStops(mapper_->counters());
     maps_ = mapper_->Snapshot();
     {
@@ -226,9 +229,7 @@ void Pipeline::RunMaps(const StereoFrame& frame, const stereo::Rectifier& rectif
       events_.Increment("maps_restarted_new_rectification");
     }
     ForgetResumedMaps();
-    mapper_ = std::make_unique<mobile_mapping::MobileMapper>(
-        rectifier.geometry(), MakeMapperParams(config_.maps, joint_limits_));
-    mapper_->SetOnPerceptualMapBuilt(RecordPerceptualReadsIn(stage_ms_));
+    mapper_ = MakeMapper(rectifier.geometry(), config_.maps, joint_limits_, stage_ms_);
     maps_.reset();
     snapshot.maps.reset();
     maps_saved_stops_ = 0;
