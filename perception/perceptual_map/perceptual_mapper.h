@@ -98,6 +98,9 @@ class PerceptualMapper {
   // Reference objects of the latest view in its base frame (for pictures and tests).
   const std::vector<ReferenceObject>& latest_objects() const { return latest_.objects; }
   size_t views() const { return views_.size(); }
+  // Segments of the global map (without the newest view's, which Map(true) adds): a count
+  // that costs nothing, where Map() builds the boundary.
+  size_t segments() const { return segments_.size(); }
   size_t skipped_views() const { return skipped_views_; }
   size_t expansions() const { return expansions_; }
   const PerceptualMapParams& params() const { return params_; }

@@ -120,7 +120,7 @@ void Pipeline::ResumeSavedMaps() {
         "maps: resuming the saved maps of {} ({} key frames, {} views, {} segments), served "
         "from now on; the first key frame decides whether the odometry continues them",
         maps_store_->path().string(), saved->key_frames, mapper_->counters().views,
-        maps_->perceptual().segments.size());
+        mapper_->perceptual().segments());
   } catch (const std::exception& e) {
     events_.Increment("maps_saved_not_resumed");
     spdlog::error("maps: the saved maps cannot be read, new maps start: {}", e.what());

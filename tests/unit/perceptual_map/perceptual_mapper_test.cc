@@ -209,5 +209,50 @@ TEST(PerceptualMapper, TheRevisionChangesExactlyWhenTheMapMayChange) {
   EXPECT_NE(restored.revision(), before_restore);
 }
 
+// The mapper finds a tracked object's segment by a binary search over the ids, so a saved
+// state must keep them increasing (as the mapper appends them); a state that does not is
+// refused whole and the mapper keeps its map. A restored map tracks and counts as the original.
+TEST(PerceptualMapper, ARestoredMapTracksAsTheOriginalAndOneWithIdsOutOfOrderIsRefused) {
+  PerceptualMapper mapper;
+  for (int k = 0; k < 8; ++k) {
+    const auto T = Pose(2 + 0.5 * k, 0, 0);
+    mapper.AddView(10 + k, Points(kCorridor, T, 5, 20 + k), T);
+  }
+  const auto state = mapper.SavedState();
+  ASSERT_GE(state.segments.size(), 3u);
+
+  PerceptualMapper restored;
+  restored.Restore(state);
+  const auto T = Pose(6.5, 0, 0);
+  const auto points = Points(kCorridor, T, 5, 99);
+  const auto original_view = mapper.AddView(30, points, T);
+  const auto restored_view = restored.AddView(30, points, T);
+  EXPECT_GT(original_view.tracked, 0u);
+  EXPECT_EQ(restored_view.tracked, original_view.tracked);
+  const auto a = mapper.Map(false), b = restored.Map(false);
+  ASSERT_EQ(a.segments.size(), b.segments.size());
+  uint32_t observations = 0;
+  for (size_t i = 0; i < a.segments.size(); ++i) {
+    EXPECT_EQ(a.segments[i].id, b.segments[i].id);
+    EXPECT_EQ(a.segments[i].observations, b.segments[i].observations);
+    observations += a.segments[i].observations;
+  }
+  EXPECT_GT(observations, a.segments.size());  // tracked objects were counted again
+
+  auto shuffled = state;
+  std::swap(shuffled.segments[0], shuffled.segments[2]);
+  PerceptualMapper refuses;
+  refuses.Restore(mapper.SavedState());
+  const auto before = refuses.Map(false);
+  try {
+    refuses.Restore(shuffled);
+    ADD_FAILURE() << "a state with segment ids out of order was taken";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("segment ids not increasing"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(refuses.Map(false).segments.size(), before.segments.size());
+}
+
 }  // namespace
 }  // namespace epmap
