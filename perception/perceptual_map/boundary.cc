@@ -233,14 +233,26 @@ Boundary ComputeBoundary(const std::vector<MapSegment>& segments,
   std::vector<uint32_t> near_placed;
   const size_t per_side = static_cast<size_t>(params.objects_per_side);
   const double max_d = params.max_distance_m;
+  // The previous path point's farthest kept object and where that point was: its nearest few
+  // on each side are at most that far plus the step from it (a distance to a segment changes
+  // no faster than the point moves), so a square that wide around the next point settles it in
+  // one look. On a dense map that square is much smaller than a cell. (Any first square gives
+  // the same answer, the loop below widens it until settled; this one saves looks and
+  // candidates.) -1: the previous point did not fill both sides.
+  double previous_worst = -1;
+  Eigen::Vector2d previous_q = Eigen::Vector2d::Zero();
   for (const auto& q : samples) {
     // Squares of growing half-width r around q: an object outside the square is at least r
     // away, so once each side has its nearest few nearer than r, no object outside can beat or
-    // tie them. Where the map is dense (a floor driven many times) the first square settles
-    // most samples; when both sides have their few but not all nearer than r, the next square
-    // is just wide enough to hold every object as near as they are. An object within max_d has
-    // its box within the square of half-width max_d.
-    for (double r = params.index_cell_m > 0 ? std::min(params.index_cell_m, max_d) : max_d;;) {
+    // tie them. The first square is one cell, or the one the previous point's objects settle
+    // (above) if smaller; when both sides have their few but not all nearer than r, the next square
+    // is just wide enough to hold every object as near as they are. An object within max_d has its
+    // box within the square of half-width max_d.
+    double first_r = params.index_cell_m > 0 ? std::min(params.index_cell_m, max_d) : max_d;
+    if (previous_worst >= 0) {
+      first_r = std::min(first_r, (previous_worst + (q - previous_q).norm()) * (1 + 1e-9) + 1e-9);
+    }
+    for (double r = first_r;;) {
       nearest[0].clear();
       nearest[1].clear();
       placed_index.Query(BoxAround(q, r), &near_placed);
@@ -278,6 +290,9 @@ Boundary ComputeBoundary(const std::vector<MapSegment>& segments,
     for (const auto& side : nearest) {
       for (const auto& [d, s] : side) kept.insert(s);
     }
+    const bool both_full = nearest[0].size() == per_side && nearest[1].size() == per_side;
+    previous_worst = both_full ? std::max(nearest[0].back().first, nearest[1].back().first) : -1.0;
+    previous_q = q;
   }
 
   // 4. Boundary: the kept objects of each side in the order the path passes them, each one's
