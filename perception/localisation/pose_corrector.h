@@ -68,6 +68,9 @@ class PoseCorrector {
   bool empty() const { return records_.empty(); }
   const PoseRecord& latest() const;
   const std::vector<PoseRecord>& records() const { return records_; }
+  // The records, moved out of a corrector that is done with (a provisional copy): one copy of
+  // the whole run less per snapshot.
+  std::vector<PoseRecord> TakeRecords() && { return std::move(records_); }
   // Corrected minus odometry pose of the latest key frame (x, y, theta wrapped to (-pi, pi]).
   Eigen::Vector3d LatestDifference() const;
 

@@ -535,7 +535,7 @@ std::shared_ptr<const MapsSnapshot> MobileMapper::SnapshotWithOpenStop() const {
   s->perceptual_on_read =
       std::make_shared<const PerceptualMapOnRead>(std::move(perceptual), on_perceptual_map_built_);
   s->grid = std::move(grid);
-  s->poses = poses.records();
+  s->poses = std::move(poses).TakeRecords();
   s->counters = counters_;  // what happened, not what the provisional merge would count
   return s;
 }
