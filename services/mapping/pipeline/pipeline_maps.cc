@@ -117,8 +117,9 @@ void Pipeline::ResumeSavedMaps() {
     }
     events_.Increment("maps_resumed");
     spdlog::info(
-        "maps: resuming the saved maps of {} ({} key frames, {} views, {} segments), served "
-        "from now on; the first key frame decides whether the odometry continues them",
+        "maps: resuming the saved maps of {} ({} key frames, {} views taken, {} segments joined "
+        "before the newest view's), served from now on; the first key frame decides whether the "
+        "odometry continues them",
         maps_store_->path().string(), saved->key_frames, mapper_->counters().views,
         mapper_->perceptual().segments());
   } catch (const std::exception& e) {
