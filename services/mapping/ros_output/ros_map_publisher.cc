@@ -101,12 +101,12 @@ void RosMapPublisher::Run() {
   const auto period = std::chrono::duration_cast<Clock::duration>(
       std::chrono::duration<double>(config_.maps.grid_publish_period_s));
   uint64_t seen_frame = 0;
-  std::shared_ptr<const mobile_mapping::MapsSnapshot> published, maps_pending;
+  std::shared_ptr<const mobile_mapping::MapsSnapshot> published, grid_pending, markers_pending;
   Clock::time_point last_grid{};
   if (resumed_) {
     // The snapshots carry these same maps until a key frame changes them: sent once.
     CreateWriters();
-    published = maps_pending = resumed_;
+    published = grid_pending = markers_pending = resumed_;
   }
   while (!stop_) {
     const auto snapshot = snapshots_.WaitNewer(seen_frame, std::chrono::milliseconds(200));
@@ -121,7 +121,7 @@ void RosMapPublisher::Run() {
         if (!writers_->created()) CreateWriters();
         if (snapshot->maps != published) {
           published = snapshot->maps;
-          maps_pending = snapshot->maps;
+          grid_pending = markers_pending = snapshot->maps;
         }
         // Every frame, at its own time (the correction holds until the next key frame).
         PublishTransform(*snapshot->maps, std::max(snapshot->stamp_ns, snapshot->maps->stamp_ns));
@@ -129,11 +129,24 @@ void RosMapPublisher::Run() {
     }
     // The grid (and the perceptual map beside it) at most once a period, the newest one; a
     // change that arrives within the period goes out when it ends.
-    if (maps_pending && Clock::now() - last_grid >= period) {
-      PublishGrid(*maps_pending);
-      PublishMarkers(*maps_pending);
-      maps_pending.reset();
-      last_grid = Clock::now();
+    // The perceptual map's markers are built only while a reader (RViz) is matched: building
+    // them computes III-D's boundary, which grows with the map (about 40 ms per snapshot after
+    // 750 m), for nobody otherwise. The newest waits and goes out within a loop of a reader
+    // matching, as a late joiner of the latched topic would have it.
+    if ((grid_pending || markers_pending) && Clock::now() - last_grid >= period) {
+      bool sent = false;
+      if (grid_pending) {
+        PublishGrid(*grid_pending);
+        grid_pending.reset();
+        sent = true;
+      }
+      if (markers_pending && !writers_->markers) markers_pending.reset();
+      if (markers_pending && writers_->markers->MatchedReaders() > 0) {
+        PublishMarkers(*markers_pending);
+        markers_pending.reset();
+        sent = true;
+      }
+      if (sent) last_grid = Clock::now();
     }
   }
 }

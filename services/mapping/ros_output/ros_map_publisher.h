@@ -7,7 +7,9 @@
 // pipeline never waits for DDS. The correction changes at key frames only, but map -> odom goes
 // out with every processed frame, stamped with that frame's time: tf lookups at sensor time
 // then never extrapolate past the last key frame while the robot stands still. With each grid
-// the perceptual map goes out as a visualization_msgs/MarkerArray (perceptual_map_markers.h).
+// the perceptual map goes out as a visualization_msgs/MarkerArray (perceptual_map_markers.h)
+// while a reader (RViz) is matched; with none, the newest waits for one (building it costs
+// III-D's boundary, which grows with the map).
 
 #include <Eigen/Geometry>
 #include <atomic>
