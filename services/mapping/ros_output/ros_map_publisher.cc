@@ -131,8 +131,8 @@ void RosMapPublisher::Run() {
     // change that arrives within the period goes out when it ends.
     // The perceptual map's markers are built only while a reader (RViz) is matched: building
     // them computes III-D's boundary, which grows with the map (about 40 ms per snapshot after
-    // 750 m), for nobody otherwise. The newest waits and goes out within a loop of a reader
-    // matching, as a late joiner of the latched topic would have it.
+    // 750 m), for nobody otherwise. The newest waits and goes out at the first period's end
+    // after a reader matches (within a second), as a late joiner of the latched topic expects.
     if ((grid_pending || markers_pending) && Clock::now() - last_grid >= period) {
       bool sent = false;
       if (grid_pending) {
