@@ -160,13 +160,12 @@ def med(values, scale=1.0):
 print("rolling medians (last 256 values) sampled every 15 s, median by quarter of the run:")
 print(f"{'quarter':<8} {'key_frame ms':>13} {'open_stop ms':>13} {'first read ms':>14} "
       f"{'resident MB':>12} {'pmap poll ms':>13} {'grid poll ms':>13}")
-start_s = samples[0][0] if samples else 0
 for q in range(4):
-    part = [s for _, s in samples
-            if q / 4 <= int(s["frames_processed"]) / total < (q + 1) / 4 or
-            (q == 3 and int(s["frames_processed"]) >= total)]
-    t_from = [t for t, s in samples if s in part]
-    in_q = [p for p in polls if t_from and min(t_from) - 15 <= p[0] <= max(t_from)]
+    in_quarter = [(t, s) for t, s in samples
+                  if min(3, 4 * int(s["frames_processed"]) // total) == q]
+    part = [s for _, s in in_quarter]
+    times = [t for t, _ in in_quarter]
+    in_q = [p for p in polls if times and min(times) - 15 <= p[0] <= max(times)]
     print(f"{q + 1:<8} {med([stage(s, 'maps.key_frame') for s in part]):>13} "
           f"{med([stage(s, 'maps.open_stop') for s in part]):>13} "
           f"{med([stage(s, 'maps.perceptual_read') for s in part]):>14} "
